@@ -1,0 +1,87 @@
+#pragma once
+/// isin — the pinhole camera of note §3: eye, a 16×9 image plane at distance 10, primary rays.
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "ray.hpp"
+#include "vec.hpp"
+
+namespace isin {
+
+/// Pinhole camera. By default it is the note's: eye at the origin looking along +Z, a 16×9 image
+/// plane centred on the Z axis at z = 10, pixel (0,0) top-left. A pose (position, yaw about +Y,
+/// pitch about the camera's right axis, radians, left-handed: yaw +90° turns +Z into +X) moves and
+/// turns that whole rig; the plane keeps its size and distance.
+template <class T>
+class Camera {
+    static_assert(std::is_floating_point_v<T>, "isin::Camera needs a floating-point type");
+
+public:
+    /// Largest accepted image side, so that width × height × 4 bytes stays well inside memory.
+    static constexpr int max_side = 1 << 15;
+
+    /// The note's camera for a width × height image. Throws std::invalid_argument unless both
+    /// sides are in [2, max_side] (the mapping divides by W − 1 and H − 1).
+    Camera(int width, int height) : Camera(width, height, Vertex<T>{T(0), T(0), T(0)}, T(0), T(0)) {}
+
+    /// A camera at `position`, turned by `yaw` and `pitch` (radians), note's plane otherwise.
+    Camera(int width, int height, const Vertex<T>& position, T yaw, T pitch)
+        : width_(checked_side(width, "width")), height_(checked_side(height, "height")) {
+        set_pose(position, yaw, pitch);
+    }
+
+    /// Moves and turns the camera. Non-finite values are ignored (the pose stays as it was).
+    void set_pose(const Vertex<T>& position, T yaw, T pitch) noexcept {
+        if (!is_finite(position) || !std::isfinite(yaw) || !std::isfinite(pitch)) return;
+        position_ = position;
+        yaw_ = yaw;
+        pitch_ = pitch;
+        const T cy = std::cos(yaw), sy = std::sin(yaw), cp = std::cos(pitch), sp = std::sin(pitch);
+        forward_ = {sy * cp, sp, cy * cp};
+        right_ = {cy, T(0), -sy};
+        up_ = cross(forward_, right_); // left-handed: right × up = forward
+    }
+
+    [[nodiscard]] int width() const noexcept { return width_; }
+    [[nodiscard]] int height() const noexcept { return height_; }
+    [[nodiscard]] const Vertex<T>& position() const noexcept { return position_; }
+    [[nodiscard]] T yaw() const noexcept { return yaw_; }
+    [[nodiscard]] T pitch() const noexcept { return pitch_; }
+    [[nodiscard]] const Vertex<T>& forward() const noexcept { return forward_; }
+    [[nodiscard]] const Vertex<T>& right() const noexcept { return right_; }
+    [[nodiscard]] const Vertex<T>& up() const noexcept { return up_; }
+
+    /// Size of the image plane (16 × 9 in the note) and its distance from the eye (10).
+    T plane_width = T(16);
+    T plane_height = T(9);
+    T plane_distance = T(10);
+
+    /// The image-plane point GD of pixel (x, y) (§3): (16·x/(W−1) − 8, 4.5 − 9·y/(H−1), 10) in
+    /// the camera's frame, moved to world space by the pose. Fractional x, y address sub-pixels.
+    [[nodiscard]] Vertex<T> image_point(T x, T y) const noexcept {
+        const T gx = plane_width * x / T(width_ - 1) - plane_width / T(2);   // §3: 16·x/(W−1) − 8
+        const T gy = plane_height / T(2) - plane_height * y / T(height_ - 1); // §3: 4.5 − 9·y/(H−1)
+        return position_ + gx * right_ + gy * up_ + plane_distance * forward_; // §3: GD, z = 10
+    }
+
+    /// The primary ray through pixel (x, y) (§3): Ro = eye, Rd = normalize(GD − eye).
+    [[nodiscard]] Ray<T> primary_ray(T x, T y) const noexcept {
+        return {position_, normalize(image_point(x, y) - position_)}; // §3: Rd = (GD − eye)/|GD − eye|
+    }
+
+private:
+    static int checked_side(int side, const char* what) {
+        if (side < 2 || side > max_side)
+            throw std::invalid_argument(std::string("isin::Camera: image ") + what + " " +
+                                        std::to_string(side) + " is outside [2, " +
+                                        std::to_string(max_side) + "]");
+        return side;
+    }
+
+    int width_, height_;
+    Vertex<T> position_{}, forward_{}, right_{}, up_{};
+    T yaw_ = T(0), pitch_ = T(0);
+};
+
+} // namespace isin

@@ -1,0 +1,148 @@
+#pragma once
+/// isin — triangles: the normal of note §2 and the ray–triangle tests of §4 (area test) and §10
+/// (Möller–Trumbore).
+#include <limits>
+
+#include "hit.hpp"
+#include "ray.hpp"
+#include "vec.hpp"
+
+namespace isin {
+
+/// A triangle V0, V1, V2. Its front face is the one whose vertices run clockwise as seen by the
+/// viewer (left-handed frame); `normal()` points out of it.
+template <class T>
+struct Triangle {
+    static_assert(std::is_floating_point_v<T>, "isin::Triangle needs a floating-point type");
+    Vertex<T> v0, v1, v2;
+};
+
+using Trianglef = Triangle<float>;
+using Triangled = Triangle<double>;
+
+/// Raw, unnormalised triangle normal (§2): N = (V1−V0) × (V2−V0); |N| is twice the area.
+template <class T>
+[[nodiscard]] constexpr Vertex<T> normal(const Triangle<T>& tri) noexcept {
+    return cross(tri.v1 - tri.v0, tri.v2 - tri.v0); // §2: N = (V1−V0) × (V2−V0)
+}
+
+/// Offset D of the plane A x + B y + C z + D = 0 with normal (A,B,C) = N through V0 (§4).
+template <class T>
+[[nodiscard]] constexpr T plane_offset(const Vertex<T>& N, const Vertex<T>& V0) noexcept {
+    return -dot(N, V0); // §4: D = −N·V0
+}
+
+/// Ray parameter where the ray meets the plane A x + B y + C z + D = 0 with (A,B,C) = N
+/// (§4): t = −(N·Ro + D) / (N·Rd). NaN when the ray is parallel to the plane.
+template <class T>
+[[nodiscard]] constexpr T ray_plane_t(const Ray<T>& ray, const Vertex<T>& N, T D) noexcept {
+    const T NdotRd = dot(N, ray.direction);
+    if (NdotRd == T(0)) return std::numeric_limits<T>::quiet_NaN(); // §4: N·Rd = 0 → parallel
+    return -(dot(N, ray.origin) + D) / NdotRd; // §4: t = −(N·Ro + D) / (N·Rd)
+}
+
+/// The four parallelogram areas of the §4 area test for a point R on the triangle's plane.
+template <class T>
+struct AreaTerms {
+    T S, s1, s2, s3;
+};
+
+/// e1 = V1−V0, e2 = V2−V0 and N = e1 × e2 are passed in because the callers already have them.
+template <class T>
+[[nodiscard]] inline AreaTerms<T> area_terms(const Triangle<T>& tri, const Vertex<T>& e1,
+                                             const Vertex<T>& e2, const Vertex<T>& N,
+                                             const Vertex<T>& R) noexcept {
+    return {length(N),                                  // §4: S  = |(V1−V0)×(V2−V0)|
+            length(cross(R - tri.v0, e2)),              // §4: s1 = |(R−V0)×(V2−V0)|
+            length(cross(e1, R - tri.v0)),              // §4: s2 = |(V1−V0)×(R−V0)|
+            length(cross(tri.v1 - R, tri.v2 - R))};     // §4: s3 = |(V1−R)×(V2−R)|
+}
+
+/// The §4 areas for a point R, from the triangle alone.
+template <class T>
+[[nodiscard]] inline AreaTerms<T> area_terms(const Triangle<T>& tri, const Vertex<T>& R) noexcept {
+    const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+    return area_terms(tri, e1, e2, cross(e1, e2), R);
+}
+
+namespace detail {
+/// True when the edges e1, e2 span no area: |e1 × e2| lies within the rounding noise of the cross
+/// product (sin of the angle between the edges below ~8ε). Scale-free, overflow-free in max norm.
+template <class T>
+[[nodiscard]] inline bool is_degenerate(const Vertex<T>& e1, const Vertex<T>& e2,
+                                        const Vertex<T>& N) noexcept {
+    constexpr T eps = std::numeric_limits<T>::epsilon();
+    return !(max_abs(N) > T(8) * eps * max_abs(e1) * max_abs(e2)); // NaN → degenerate
+}
+
+/// Shared body of both area tests; `tolerance(S, R, e1, e2)` gives the allowed |S − (s1+s2+s3)|.
+template <class T, class Tolerance>
+[[nodiscard]] inline Hit<T> intersect_area_with(const Ray<T>& ray, const Triangle<T>& tri,
+                                                Tolerance tolerance) noexcept {
+    const Vertex<T> e1 = tri.v1 - tri.v0;
+    const Vertex<T> e2 = tri.v2 - tri.v0;
+    const Vertex<T> N = cross(e1, e2);                    // §4: (A,B,C) = N
+    if (detail::is_degenerate(e1, e2, N)) return Hit<T>::miss();
+    const T D = isin::plane_offset(N, tri.v0);
+    const T t = isin::ray_plane_t(ray, N, D);
+    if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss(); // §4: t ≤ 0 → behind
+    const Vertex<T> R = ray.at(t);                        // §3: R = Ro + t·Rd
+    const AreaTerms<T> a = isin::area_terms(tri, e1, e2, N, R);
+    if (!(std::fabs(a.S - (a.s1 + a.s2 + a.s3)) <= tolerance(a.S, R, e1, e2))) // §4: |S − Σs| ≤ ε
+        return Hit<T>::miss();
+    return Hit<T>::at(t, a.s1 / a.S, a.s2 / a.S); // u = s1/S weighs V1, v = s2/S weighs V2
+}
+
+} // namespace detail
+
+/// Area test of note §4 with the note's absolute tolerance, exactly as written: inside when
+/// |S − (s1+s2+s3)| ≤ epsilon (the note uses 0.005, in squared length units). Being absolute,
+/// it accepts whole neighbourhoods of tiny triangles and rejects hits on huge or far-away ones.
+template <class T>
+[[nodiscard]] inline Hit<T> intersect_area(const Ray<T>& ray, const Triangle<T>& tri,
+                                           T epsilon) noexcept {
+    return detail::intersect_area_with(ray, tri, [epsilon](T, const Vertex<T>&, const Vertex<T>&,
+                                                           const Vertex<T>&) { return epsilon; });
+}
+
+/// Area test of note §4 with isin's scale-relative tolerance (default). The allowed excess
+/// |S − (s1+s2+s3)| is 32ε·(S + 4·L·M): S covers the rounding of the areas themselves, L·M the
+/// rounding of R − Vi when coordinates (magnitude M) dwarf the edges (length L) — a far-away
+/// scene. ε is the machine epsilon of T, so 1e-3 and 1e5 triangles behave alike.
+template <class T>
+[[nodiscard]] inline Hit<T> intersect_area(const Ray<T>& ray, const Triangle<T>& tri) noexcept {
+    return detail::intersect_area_with(
+        ray, tri, [&tri](T S, const Vertex<T>& R, const Vertex<T>& e1, const Vertex<T>& e2) {
+            constexpr T eps = std::numeric_limits<T>::epsilon();
+            const T L = std::fmax(max_abs(e1), max_abs(e2));
+            const T M = std::fmax(max_abs(R), max_abs(tri.v0));
+            return T(32) * eps * (S + T(4) * L * M);
+        });
+}
+
+/// Möller–Trumbore ray–triangle test (Möller & Trumbore 1997; note §10) with barycentrics u, v:
+/// P = V0 + u(V1−V0) + v(V2−V0). Two-sided unless `cull_backfaces`, which keeps only front faces
+/// (clockwise seen from the ray origin, N·Rd < 0, i.e. det > 0). No absolute ε: det = 0 is the
+/// parallel case, and a zero-area triangle is rejected on the hit path by a scale-free test.
+template <class T>
+[[nodiscard]] inline Hit<T> intersect_moller_trumbore(const Ray<T>& ray, const Triangle<T>& tri,
+                                                      bool cull_backfaces = false) noexcept {
+    const Vertex<T> e1 = tri.v1 - tri.v0;
+    const Vertex<T> e2 = tri.v2 - tri.v0;
+    const Vertex<T> p = cross(ray.direction, e2);      // MT: P = Rd × E2
+    const T det = dot(e1, p);                          // MT: det = E1·P = −N·Rd
+    if (cull_backfaces ? !(det > T(0)) : !(det != T(0))) return Hit<T>::miss(); // §11: det ≤ 0 → backface
+    const T inv_det = T(1) / det;
+    const Vertex<T> s = ray.origin - tri.v0;           // MT: S = Ro − V0
+    const T u = dot(s, p) * inv_det;                   // MT: u = S·P / det
+    if (!(u >= T(0) && u <= T(1))) return Hit<T>::miss();
+    const Vertex<T> q = cross(s, e1);                  // MT: Q = S × E1
+    const T v = dot(ray.direction, q) * inv_det;       // MT: v = Rd·Q / det
+    if (!(v >= T(0) && u + v <= T(1))) return Hit<T>::miss();
+    const T t = dot(e2, q) * inv_det;                  // MT: t = E2·Q / det
+    if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
+    if (detail::is_degenerate(e1, e2, cross(e1, e2))) return Hit<T>::miss(); // hit path only
+    return Hit<T>::at(t, u, v);
+}
+
+} // namespace isin

@@ -1,0 +1,78 @@
+#pragma once
+/// isin — vector algebra of note §2: the Vertex type, dot, cross, length, normalize, reflect.
+#include <cmath>
+#include <type_traits>
+
+namespace isin {
+
+/// A point or direction in the note's left-handed frame (+X right, +Y up, +Z forward).
+template <class T>
+struct Vertex {
+    static_assert(std::is_floating_point_v<T>, "isin::Vertex needs float, double or long double");
+    T x, y, z;
+
+    constexpr Vertex& operator+=(const Vertex& b) noexcept { x += b.x; y += b.y; z += b.z; return *this; }
+    constexpr Vertex& operator-=(const Vertex& b) noexcept { x -= b.x; y -= b.y; z -= b.z; return *this; }
+    constexpr Vertex& operator*=(T s) noexcept { x *= s; y *= s; z *= s; return *this; }
+    constexpr Vertex& operator/=(T s) noexcept { x /= s; y /= s; z /= s; return *this; }
+};
+
+using Vec3f = Vertex<float>;
+using Vec3d = Vertex<double>;
+
+template <class T> constexpr Vertex<T> operator+(const Vertex<T>& a, const Vertex<T>& b) noexcept { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+template <class T> constexpr Vertex<T> operator-(const Vertex<T>& a, const Vertex<T>& b) noexcept { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+template <class T> constexpr Vertex<T> operator-(const Vertex<T>& a) noexcept { return {-a.x, -a.y, -a.z}; }
+template <class T> constexpr Vertex<T> operator+(const Vertex<T>& a) noexcept { return a; }
+template <class T> constexpr Vertex<T> operator*(const Vertex<T>& a, T s) noexcept { return {a.x * s, a.y * s, a.z * s}; }
+template <class T> constexpr Vertex<T> operator*(T s, const Vertex<T>& a) noexcept { return {s * a.x, s * a.y, s * a.z}; }
+template <class T> constexpr Vertex<T> operator/(const Vertex<T>& a, T s) noexcept { return {a.x / s, a.y / s, a.z / s}; }
+template <class T> constexpr bool operator==(const Vertex<T>& a, const Vertex<T>& b) noexcept { return a.x == b.x && a.y == b.y && a.z == b.z; }
+template <class T> constexpr bool operator!=(const Vertex<T>& a, const Vertex<T>& b) noexcept { return !(a == b); }
+
+/// Dot product (§2): R1·R2 = x1x2 + y1y2 + z1z2 = |R1||R2|cos β.
+template <class T>
+[[nodiscard]] constexpr T dot(const Vertex<T>& a, const Vertex<T>& b) noexcept {
+    return a.x * b.x + a.y * b.y + a.z * b.z; // §2: R1·R2
+}
+
+/// Cross product (§2); in the left-handed frame +X × +Y = +Z.
+template <class T>
+[[nodiscard]] constexpr Vertex<T> cross(const Vertex<T>& a, const Vertex<T>& b) noexcept {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; // §2: R1 × R2
+}
+
+/// Length (§2): |R| = sqrt(x² + y² + z²).
+template <class T>
+[[nodiscard]] inline T length(const Vertex<T>& a) noexcept {
+    return std::sqrt(dot(a, a)); // §2: |R|
+}
+
+/// Unit vector in the direction of `a` (§2: divide by the length). A zero, infinite or NaN
+/// vector has no direction: the result is then (0,0,0), which every intersection test misses.
+template <class T>
+[[nodiscard]] inline Vertex<T> normalize(const Vertex<T>& a) noexcept {
+    const T len = length(a);
+    if (!(len > T(0)) || !std::isfinite(len)) return {T(0), T(0), T(0)};
+    return a / len; // §2: R / |R|
+}
+
+/// Mirror direction `d` about the unit normal `n` (§7, §8): Rf = d − 2(d·n)n.
+template <class T>
+[[nodiscard]] constexpr Vertex<T> reflect(const Vertex<T>& d, const Vertex<T>& n) noexcept {
+    return d - T(2) * dot(d, n) * n; // §8: Rd − 2(Rd·N)N
+}
+
+/// True when every component is finite (no NaN, no infinity).
+template <class T>
+[[nodiscard]] inline bool is_finite(const Vertex<T>& a) noexcept {
+    return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
+}
+
+/// Largest absolute component (the max norm), a cheap magnitude for scale-relative tolerances.
+template <class T>
+[[nodiscard]] inline T max_abs(const Vertex<T>& a) noexcept {
+    return std::fmax(std::fabs(a.x), std::fmax(std::fabs(a.y), std::fabs(a.z)));
+}
+
+} // namespace isin

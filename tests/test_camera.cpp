@@ -1,0 +1,88 @@
+// Note §3: the ray R(t) = Ro + t·Rd and the pinhole camera with its 16×9 plane at z = 10.
+#include <isin/camera.hpp>
+
+#include <doctest/doctest.h>
+
+#include "approx.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+TEST_CASE_TEMPLATE("§3 ray: R(t) = Ro + t·Rd", T, float, double) {
+    const isin::Ray<T> ray{{1, 2, 3}, {0, T(0.6), T(0.8)}};
+    CHECK(ray.at(T(0)) == ray.origin);
+    const auto p = ray.at(T(10));
+    CHECK(p.x == approx(1));
+    CHECK(p.y == approx(8));
+    CHECK(p.z == approx(11));
+}
+
+TEST_CASE_TEMPLATE("§3 example 3a: pixel (0,0) → (−8,4.5,10), pixel (799,449) → (8,−4.5,10)", T,
+                   float, double) {
+    const isin::Camera<T> cam{800, 450};
+    CHECK(cam.image_point(T(0), T(0)) == isin::Vertex<T>{-8, T(4.5), 10});
+    CHECK(cam.image_point(T(799), T(449)) == isin::Vertex<T>{8, T(-4.5), 10});
+}
+
+TEST_CASE_TEMPLATE("§3 GD(x,y) = (16·x/(W−1) − 8, 4.5 − 9·y/(H−1), 10) for any W×H", T, float,
+                   double) {
+    const isin::Camera<T> cam{1920, 1080};
+    for (int y : {0, 17, 540, 1079})
+        for (int x : {0, 3, 960, 1919}) {
+            const auto gd = cam.image_point(T(x), T(y));
+            CHECK(gd.x == approx(16.0 * x / 1919.0 - 8.0));
+            CHECK(gd.y == approx(4.5 - 9.0 * y / 1079.0));
+            CHECK(gd.z == T(10));
+        }
+}
+
+TEST_CASE_TEMPLATE("§3 primary ray: Ro = eye, Rd = normalize(GD − eye)", T, float, double) {
+    const isin::Camera<T> cam{800, 450};
+    const auto ray = cam.primary_ray(T(0), T(0));
+    CHECK(ray.origin == isin::Vertex<T>{0, 0, 0});
+    const T len = std::sqrt(T(64) + T(20.25) + T(100));
+    CHECK(ray.direction.x == approx(-8 / len));
+    CHECK(ray.direction.y == approx(T(4.5) / len));
+    CHECK(ray.direction.z == approx(10 / len));
+    // The centre of the plane (between pixels 399 and 400, 224 and 225) looks straight down +Z.
+    const auto centre = cam.primary_ray(T(399.5), T(224.5));
+    CHECK(centre.direction.x == approx(0));
+    CHECK(centre.direction.y == approx(0));
+    CHECK(centre.direction.z == approx(1));
+}
+
+TEST_CASE_TEMPLATE("§3 a posed camera moves and turns the whole rig (left-handed, +Y up)", T, float,
+                   double) {
+    const T half_pi = T(1.5707963267948966);
+    const isin::Camera<T> cam{800, 450, {5, 1, -2}, half_pi, T(0)};
+    // Yaw +90° turns forward +Z into +X and right +X into −Z.
+    CHECK(cam.forward().x == approx(1));
+    CHECK(cam.forward().z == approx(0).epsilon(1e-6));
+    CHECK(cam.right().z == approx(-1));
+    CHECK(cam.up().y == approx(1));
+    const auto gd = cam.image_point(T(399.5), T(224.5));
+    CHECK(gd.x == approx(15));
+    CHECK(gd.y == approx(1));
+    CHECK(gd.z == approx(-2));
+    // Pitch up 90° from rest looks along +Y.
+    const isin::Camera<T> up{800, 450, {0, 0, 0}, T(0), half_pi};
+    CHECK(up.forward().y == approx(1));
+    CHECK(isin::length(up.up()) == approx(1));
+}
+
+TEST_CASE("§3 bad image sizes are rejected with a clear error") {
+    CHECK_THROWS_AS(isin::Camera<float>(1, 450), std::invalid_argument);
+    CHECK_THROWS_AS(isin::Camera<float>(800, 0), std::invalid_argument);
+    CHECK_THROWS_AS(isin::Camera<double>(-800, 450), std::invalid_argument);
+    CHECK_THROWS_AS(isin::Camera<double>(800, 1 << 20), std::invalid_argument);
+    CHECK_THROWS_WITH(isin::Camera<double>(0, 450), doctest::Contains("width 0"));
+    CHECK_NOTHROW(isin::Camera<float>(2, 2));
+}
+
+TEST_CASE("§3 a non-finite pose is ignored") {
+    isin::Camera<double> cam{800, 450};
+    cam.set_pose({std::nan(""), 0, 0}, 0, 0);
+    CHECK(cam.position() == isin::Vec3d{0, 0, 0});
+    cam.set_pose({1, 2, 3}, HUGE_VAL, 0);
+    CHECK(cam.position() == isin::Vec3d{0, 0, 0});
+}

@@ -1,0 +1,126 @@
+// Note §6: the geometric ray–sphere test, and §8's restart-on-the-surface problem.
+#include <isin/sphere.hpp>
+
+#include <doctest/doctest.h>
+
+#include "approx.hpp"
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+TEST_CASE_TEMPLATE("§6 miss behind: s < 0 and l2 > r2", T, float, double) {
+    const isin::Sphere<T> sp{{0, 0, -20}, 5};
+    CHECK_FALSE(isin::intersect(isin::Ray<T>{{0, 0, 0}, {0, 0, 1}}, sp));
+}
+
+TEST_CASE_TEMPLATE("§6 miss aside: m2 > r2", T, float, double) {
+    const isin::Sphere<T> sp{{10, 0, 50}, 5};
+    CHECK_FALSE(isin::intersect(isin::Ray<T>{{0, 0, 0}, {0, 0, 1}}, sp));
+    // Tangent rays graze the sphere: m2 = r2 exactly is a hit at the touching point.
+    const auto tangent = isin::intersect(isin::Ray<T>{{5, 0, 0}, {0, 0, 1}}, sp);
+    REQUIRE(tangent);
+    CHECK(tangent.t == approx(50));
+}
+
+TEST_CASE_TEMPLATE("§6 hit from outside: t = s − q", T, float, double) {
+    const isin::Sphere<T> sp{{0, 0, 50}, 5};
+    const auto hit = isin::intersect(isin::Ray<T>{{0, 0, 0}, {0, 0, 1}}, sp);
+    REQUIRE(hit);
+    CHECK(hit.t == approx(45)); // s = 50, q = 5
+    // Off-centre: s = 50·0.8 = 40, m2 = 2500 − 1600 = 900 > 25 → aside; closer sphere does hit.
+    const isin::Sphere<T> near_sp{{0, 30, 40}, 10};
+    const auto off = isin::intersect(isin::Ray<T>{{0, 0, 0}, {0, T(0.6), T(0.8)}}, near_sp);
+    REQUIRE(off);
+    CHECK(off.t == approx(40)); // centre on the ray: s = 50, q = 10
+}
+
+TEST_CASE_TEMPLATE("§6 hit from inside: t = s + q", T, float, double) {
+    const isin::Sphere<T> sp{{0, 0, 50}, 5};
+    const auto from_centre = isin::intersect(isin::Ray<T>{{0, 0, 50}, {0, 0, 1}}, sp);
+    REQUIRE(from_centre);
+    CHECK(from_centre.t == approx(5));
+    const auto from_front = isin::intersect(isin::Ray<T>{{0, 0, 47}, {0, 0, 1}}, sp);
+    REQUIRE(from_front);
+    CHECK(from_front.t == approx(8)); // s = 3, q = 5
+    const auto looking_back = isin::intersect(isin::Ray<T>{{0, 0, 53}, {0, 0, -1}}, sp);
+    REQUIRE(looking_back);
+    CHECK(looking_back.t == approx(8)); // s = 3, q = 5
+    const auto s_negative = isin::intersect(isin::Ray<T>{{0, 0, 53}, {0, 0, 1}}, sp);
+    REQUIRE(s_negative);
+    CHECK(s_negative.t == approx(2)); // s = −3, q = 5
+}
+
+TEST_CASE_TEMPLATE("§6 a non-unit direction measures t in multiples of |Rd|", T, float, double) {
+    const isin::Sphere<T> sp{{0, 0, 50}, 5};
+    const auto hit = isin::intersect(isin::Ray<T>{{0, 0, 0}, {0, 0, 2}}, sp);
+    REQUIRE(hit);
+    CHECK(hit.t == approx(22.5));
+}
+
+// §8: a secondary ray starts at a hit point, which lies on the surface only to rounding. Reflected
+// (outward) it must not hit its own sphere at t ≈ 0; continuing inward it must reach the far side.
+// Primary rays from the eye hit spheres of radius r at 3r…1e3·r; the exact far-side distance is
+// computed in long double.
+TEST_CASE_TEMPLATE("§6/§8 ray restarted on the surface: no self-hit, far side found, r = 1e-2…1e4", T,
+                   float, double) {
+    std::mt19937 rng(20261123);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (T r : {T(1e-2), T(1), T(1e4)}) {
+        for (T distance : {T(3), T(1e3)}) {
+            CAPTURE(r);
+            CAPTURE(distance);
+            const isin::Sphere<T> sp{{T(0.3) * r, T(-0.2) * r, distance * r}, r};
+            int self_hits = 0, missed_exits = 0, bad_chords = 0, primaries = 0;
+            for (int i = 0; i < 2000; ++i) {
+                const isin::Vertex<T> aim{sp.center.x + T(uni(rng)) * r,
+                                          sp.center.y + T(uni(rng)) * r, sp.center.z};
+                const isin::Ray<T> primary{{0, 0, 0}, isin::normalize(aim)};
+                const auto hit = isin::intersect(primary, sp);
+                if (!hit) continue;
+                ++primaries;
+                const auto P = primary.at(hit.t);
+                const auto N = isin::normal_at(sp, P);
+                const isin::Ray<T> reflected{P, isin::reflect(primary.direction, N)};
+                if (const auto h = isin::intersect(reflected, sp)) ++self_hits;
+                const isin::Ray<T> inward{P, primary.direction};
+                const auto exit = isin::intersect(inward, sp);
+                if (!exit) {
+                    ++missed_exits;
+                    continue;
+                }
+                // Exact chord of the line through P along the direction: 2·(C − P)·Rd.
+                using L = long double;
+                const L chord = 2 * ((L(sp.center.x) - L(P.x)) * L(primary.direction.x) +
+                                     (L(sp.center.y) - L(P.y)) * L(primary.direction.y) +
+                                     (L(sp.center.z) - L(P.z)) * L(primary.direction.z));
+                if (chord > L(1e-3) * L(r) &&
+                    std::fabs(L(exit.t) - chord) > L(1e-2) * L(r))
+                    ++bad_chords;
+            }
+            CHECK(primaries > 1000);
+            CHECK(self_hits == 0);
+            CHECK(missed_exits == 0);
+            CHECK(bad_chords == 0);
+        }
+    }
+}
+
+TEST_CASE_TEMPLATE("bad input: zero/negative/NaN radius, NaN/inf rays, zero direction miss", T,
+                   float, double) {
+    const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
+    const isin::Ray<T> ok{{0, 0, 0}, {0, 0, 1}};
+    REQUIRE(isin::intersect(ok, isin::Sphere<T>{{0, 0, 50}, 5}));
+    for (T radius : {T(0), T(-5), nan, -inf})
+        CHECK_FALSE(isin::intersect(ok, isin::Sphere<T>{{0, 0, 50}, radius}));
+    CHECK_FALSE(isin::intersect(ok, isin::Sphere<T>{{0, nan, 50}, 5}));
+    CHECK_FALSE(isin::intersect(ok, isin::Sphere<T>{{0, 0, inf}, 5}));
+    const isin::Sphere<T> sp{{0, 0, 50}, 5};
+    const isin::Ray<T> bad_rays[] = {
+        {{nan, 0, 0}, {0, 0, 1}}, {{0, 0, 0}, {0, nan, 1}},  {{0, 0, inf}, {0, 0, 1}},
+        {{0, 0, 0}, {0, 0, inf}}, {{0, 0, 0}, {0, 0, 0}},    {{0, 0, 50}, {0, 0, 0}},
+    };
+    for (const auto& ray : bad_rays) CHECK_FALSE(isin::intersect(ray, sp));
+    // An infinite radius is not a sphere either: no finite hit.
+    CHECK_FALSE(isin::intersect(ok, isin::Sphere<T>{{0, 0, 50}, inf}));
+}
