@@ -1,0 +1,60 @@
+#pragma once
+/// isin — colours: linear RGB in [0,1] for shading, 8-bit RGB for images.
+#include <cmath>
+#include <cstdint>
+#include <type_traits>
+
+namespace isin {
+
+/// Linear RGB colour; 1 is full intensity. Values above 1 are allowed while shading and
+/// clamped when written to an 8-bit image.
+template <class T>
+struct Color {
+    static_assert(std::is_floating_point_v<T>, "isin::Color needs a floating-point type");
+    T r, g, b;
+
+    constexpr Color& operator+=(const Color& c) noexcept { r += c.r; g += c.g; b += c.b; return *this; }
+    constexpr Color& operator*=(T s) noexcept { r *= s; g *= s; b *= s; return *this; }
+};
+
+using Colorf = Color<float>;
+using Colord = Color<double>;
+
+template <class T> constexpr Color<T> operator+(const Color<T>& a, const Color<T>& b) noexcept { return {a.r + b.r, a.g + b.g, a.b + b.b}; }
+template <class T> constexpr Color<T> operator-(const Color<T>& a, const Color<T>& b) noexcept { return {a.r - b.r, a.g - b.g, a.b - b.b}; }
+/// Component-wise product: a surface colour lit by a light colour.
+template <class T> constexpr Color<T> operator*(const Color<T>& a, const Color<T>& b) noexcept { return {a.r * b.r, a.g * b.g, a.b * b.b}; }
+template <class T> constexpr Color<T> operator*(const Color<T>& a, T s) noexcept { return {a.r * s, a.g * s, a.b * s}; }
+template <class T> constexpr Color<T> operator*(T s, const Color<T>& a) noexcept { return {s * a.r, s * a.g, s * a.b}; }
+template <class T> constexpr Color<T> operator/(const Color<T>& a, T s) noexcept { return {a.r / s, a.g / s, a.b / s}; }
+template <class T> constexpr bool operator==(const Color<T>& a, const Color<T>& b) noexcept { return a.r == b.r && a.g == b.g && a.b == b.b; }
+template <class T> constexpr bool operator!=(const Color<T>& a, const Color<T>& b) noexcept { return !(a == b); }
+
+/// An 8-bit RGB pixel, as stored in images and in the note's examples, e.g. red (255,0,0).
+struct Rgb8 {
+    std::uint8_t r, g, b;
+};
+constexpr bool operator==(const Rgb8& a, const Rgb8& b) noexcept { return a.r == b.r && a.g == b.g && a.b == b.b; }
+constexpr bool operator!=(const Rgb8& a, const Rgb8& b) noexcept { return !(a == b); }
+
+/// The colour of an 8-bit pixel: each channel / 255.
+template <class T>
+[[nodiscard]] constexpr Color<T> from_rgb8(int r, int g, int b) noexcept {
+    return {T(r) / T(255), T(g) / T(255), T(b) / T(255)};
+}
+
+/// One channel in [0,1] to 0…255, rounded to nearest; NaN becomes 0, out-of-range values clamp.
+template <class T>
+[[nodiscard]] inline std::uint8_t to_byte(T c) noexcept {
+    if (!(c > T(0))) return 0;
+    if (!(c < T(1))) return 255;
+    return static_cast<std::uint8_t>(c * T(255) + T(0.5));
+}
+
+/// A colour as an 8-bit pixel (clamped, rounded).
+template <class T>
+[[nodiscard]] inline Rgb8 to_rgb8(const Color<T>& c) noexcept {
+    return {to_byte(c.r), to_byte(c.g), to_byte(c.b)};
+}
+
+} // namespace isin

@@ -1,0 +1,358 @@
+// Images and their files: sizes, pixel access, PPM/PNG/JPEG, atomic writes, error messages.
+#include <isin/image.hpp>
+
+#include <doctest/doctest.h>
+
+#include "approx.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#if defined(__unix__) || defined(__APPLE__)
+#include <csignal>
+#include <sys/resource.h>
+#include <unistd.h>
+#define ISIN_TEST_POSIX 1
+#else
+#define ISIN_TEST_POSIX 0
+#endif
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A fresh, empty directory under the system temp directory, removed with its contents.
+struct TempDir {
+    fs::path path;
+    TempDir() {
+        static int n = 0;
+        const auto stamp = std::to_string(isin::detail::process_id()) + "-" + std::to_string(n++);
+        path = fs::temp_directory_path() / ("isin-test-image-" + stamp);
+        fs::remove_all(path);
+        fs::create_directories(path);
+    }
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+    ~TempDir() {
+        std::error_code ec;
+        fs::permissions(path, fs::perms::owner_all, fs::perm_options::add, ec);
+        fs::remove_all(path, ec);
+    }
+    [[nodiscard]] std::string operator/(const std::string& name) const { return (path / name).string(); }
+};
+
+/// Names in `dir`, sorted.
+std::vector<std::string> listing(const fs::path& dir) {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+std::vector<unsigned char> file_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void put_file(const std::string& path, const std::string& content) {
+    std::ofstream out(path, std::ios::binary);
+    out << content;
+}
+
+/// The what() of the E thrown by f, or "" (and a failed check) if none was thrown.
+template <class E, class F>
+std::string thrown(F f) {
+    try {
+        f();
+    } catch (const E& e) {
+        return e.what();
+    } catch (...) {
+        FAIL("threw the wrong exception type");
+        return "";
+    }
+    FAIL("did not throw");
+    return "";
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+/// A small image whose every pixel differs: (x·40, y·60, 255 − x − y).
+isin::Image gradient(int w, int h) {
+    isin::Image image(w, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            image(x, y) = {static_cast<std::uint8_t>(x * 40 % 256), static_cast<std::uint8_t>(y * 60 % 256),
+                           static_cast<std::uint8_t>(255 - x - y)};
+    return image;
+}
+
+} // namespace
+
+TEST_CASE("Image: sides outside [1, 32768] throw std::invalid_argument naming the value") {
+    CHECK(contains(thrown<std::invalid_argument>([] { isin::Image(0, 5); }), "width 0"));
+    CHECK(contains(thrown<std::invalid_argument>([] { isin::Image(-3, 5); }), "width -3"));
+    CHECK(contains(thrown<std::invalid_argument>([] { isin::Image(5, 0); }), "height 0"));
+    CHECK(contains(thrown<std::invalid_argument>([] { isin::Image(5, 32769); }), "height 32769"));
+    CHECK_NOTHROW(isin::Image(1, 1));
+}
+
+TEST_CASE("Image: fill colour, row-major layout from the top, checked and unchecked access") {
+    isin::Image image(3, 2, {1, 2, 3});
+    CHECK(image.width() == 3);
+    CHECK(image.height() == 2);
+    REQUIRE(image.pixels().size() == 6);
+    for (const auto& p : image.pixels()) CHECK(p == isin::Rgb8{1, 2, 3});
+    image(2, 1) = {9, 8, 7};
+    image.at(1, 0) = {4, 5, 6};
+    CHECK(image.data()[1 * 3 + 2] == isin::Rgb8{9, 8, 7}); // pixel (x, y) at y·width + x
+    CHECK(image.data()[1] == isin::Rgb8{4, 5, 6});
+    const isin::Image& c = image;
+    CHECK(c.at(2, 1) == isin::Rgb8{9, 8, 7});
+    CHECK(c(1, 0) == isin::Rgb8{4, 5, 6});
+    CHECK_THROWS_AS((void)image.at(3, 0), std::out_of_range);
+    CHECK_THROWS_AS((void)image.at(0, 2), std::out_of_range);
+    CHECK_THROWS_AS((void)c.at(-1, 0), std::out_of_range);
+    CHECK(contains(thrown<std::out_of_range>([&] { (void)c.at(0, -1); }), "(0, -1)"));
+}
+
+TEST_CASE("write_ppm: binary P6 header, then RGB bytes row by row from the top") {
+    TempDir dir;
+    isin::Image image(2, 2);
+    image(0, 0) = {255, 0, 0};
+    image(1, 0) = {0, 255, 0};
+    image(0, 1) = {0, 0, 255};
+    image(1, 1) = {10, 20, 30};
+    isin::write_ppm(image, dir / "a.ppm");
+    const std::string header = "P6\n2 2\n255\n";
+    std::vector<unsigned char> expected(header.begin(), header.end());
+    for (int b : {255, 0, 0, 0, 255, 0, 0, 0, 255, 10, 20, 30}) expected.push_back(static_cast<unsigned char>(b));
+    CHECK(file_bytes(dir / "a.ppm") == expected);
+    CHECK(listing(dir.path) == std::vector<std::string>{"a.ppm"}); // no temporary left
+
+    const isin::Image back = isin::read_image(dir / "a.ppm");
+    CHECK(back.width() == 2);
+    CHECK(back.height() == 2);
+    CHECK(back.pixels() == image.pixels());
+}
+
+TEST_CASE("read_image: PPM with comments and maxval 15 or 65535 is scaled to 0…255") {
+    TempDir dir;
+    put_file(dir / "c.ppm", std::string("P6 # comment\n# more\n2 1\n15\n") + '\x0f' + '\x00' + '\x05' +
+                                '\x07' + '\x0f' + '\x00');
+    const isin::Image a = isin::read_image(dir / "c.ppm");
+    REQUIRE(a.width() == 2);
+    REQUIRE(a.height() == 1);
+    CHECK(a(0, 0) == isin::Rgb8{255, 0, 85});
+    CHECK(a(1, 0) == isin::Rgb8{119, 255, 0}); // 7·255/15 = 119
+
+    put_file(dir / "w.ppm", std::string("P6\n1 1\n65535\n") + '\xff' + '\xff' + '\x80' + '\x00' + '\x00' + '\x00');
+    const isin::Image b = isin::read_image(dir / "w.ppm");
+    CHECK(b(0, 0) == isin::Rgb8{255, 128, 0});
+}
+
+TEST_CASE("write_png then read_image gives the identical pixels") {
+    TempDir dir;
+    const isin::Image image = gradient(7, 5);
+#if ISIN_HAVE_STB
+    isin::write_png(image, dir / "g.png");
+    const auto bytes = file_bytes(dir / "g.png");
+    REQUIRE(bytes.size() > 8);
+    CHECK(bytes[1] == 'P'); // PNG signature \x89 P N G
+    CHECK(bytes[2] == 'N');
+    CHECK(bytes[3] == 'G');
+    const isin::Image back = isin::read_image(dir / "g.png");
+    CHECK(back.width() == 7);
+    CHECK(back.height() == 5);
+    CHECK(back.pixels() == image.pixels());
+    CHECK(listing(dir.path) == std::vector<std::string>{"g.png"});
+#else
+    CHECK(contains(thrown<std::runtime_error>([&] { isin::write_png(image, dir / "g.png"); }), "libstb-dev"));
+    CHECK(listing(dir.path).empty());
+#endif
+}
+
+#if ISIN_HAVE_STB
+// An 8×8 JPEG of the flat colour (200, 100, 50), quality 90, made once with stbi_write_jpg
+// (whose encoder trips UBSan, so it is not run here).
+// clang-format off
+const unsigned char flat_jpeg[] = {
+    0xff, 0xd8, 0xff, 0xe0, 0x00, 0x10, 0x4a, 0x46, 0x49, 0x46, 0x00, 0x01, 0x01, 0x00, 0x00, 0x01,
+    0x00, 0x01, 0x00, 0x00, 0xff, 0xdb, 0x00, 0x84, 0x00, 0x03, 0x02, 0x02, 0x03, 0x02, 0x02, 0x03,
+    0x03, 0x03, 0x03, 0x04, 0x03, 0x03, 0x04, 0x05, 0x08, 0x05, 0x05, 0x04, 0x04, 0x05, 0x0a, 0x07,
+    0x07, 0x06, 0x08, 0x0c, 0x0a, 0x0c, 0x0c, 0x0b, 0x0a, 0x0b, 0x0b, 0x0d, 0x0e, 0x12, 0x10, 0x0d,
+    0x0e, 0x11, 0x0e, 0x0b, 0x0b, 0x10, 0x16, 0x10, 0x11, 0x13, 0x14, 0x15, 0x15, 0x15, 0x0c, 0x0f,
+    0x17, 0x18, 0x16, 0x14, 0x18, 0x12, 0x14, 0x15, 0x14, 0x01, 0x03, 0x04, 0x04, 0x05, 0x04, 0x05,
+    0x09, 0x05, 0x05, 0x09, 0x14, 0x0d, 0x0b, 0x0d, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14,
+    0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14,
+    0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14,
+    0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0x14, 0xff, 0xc0, 0x00, 0x11, 0x08, 0x00,
+    0x08, 0x00, 0x08, 0x03, 0x01, 0x22, 0x00, 0x02, 0x11, 0x01, 0x03, 0x11, 0x01, 0xff, 0xc4, 0x01,
+    0xa2, 0x00, 0x00, 0x01, 0x05, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00,
+    0x00, 0x00, 0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x0a, 0x0b, 0x10, 0x00,
+    0x02, 0x01, 0x03, 0x03, 0x02, 0x04, 0x03, 0x05, 0x05, 0x04, 0x04, 0x00, 0x00, 0x01, 0x7d, 0x01,
+    0x02, 0x03, 0x00, 0x04, 0x11, 0x05, 0x12, 0x21, 0x31, 0x41, 0x06, 0x13, 0x51, 0x61, 0x07, 0x22,
+    0x71, 0x14, 0x32, 0x81, 0x91, 0xa1, 0x08, 0x23, 0x42, 0xb1, 0xc1, 0x15, 0x52, 0xd1, 0xf0, 0x24,
+    0x33, 0x62, 0x72, 0x82, 0x09, 0x0a, 0x16, 0x17, 0x18, 0x19, 0x1a, 0x25, 0x26, 0x27, 0x28, 0x29,
+    0x2a, 0x34, 0x35, 0x36, 0x37, 0x38, 0x39, 0x3a, 0x43, 0x44, 0x45, 0x46, 0x47, 0x48, 0x49, 0x4a,
+    0x53, 0x54, 0x55, 0x56, 0x57, 0x58, 0x59, 0x5a, 0x63, 0x64, 0x65, 0x66, 0x67, 0x68, 0x69, 0x6a,
+    0x73, 0x74, 0x75, 0x76, 0x77, 0x78, 0x79, 0x7a, 0x83, 0x84, 0x85, 0x86, 0x87, 0x88, 0x89, 0x8a,
+    0x92, 0x93, 0x94, 0x95, 0x96, 0x97, 0x98, 0x99, 0x9a, 0xa2, 0xa3, 0xa4, 0xa5, 0xa6, 0xa7, 0xa8,
+    0xa9, 0xaa, 0xb2, 0xb3, 0xb4, 0xb5, 0xb6, 0xb7, 0xb8, 0xb9, 0xba, 0xc2, 0xc3, 0xc4, 0xc5, 0xc6,
+    0xc7, 0xc8, 0xc9, 0xca, 0xd2, 0xd3, 0xd4, 0xd5, 0xd6, 0xd7, 0xd8, 0xd9, 0xda, 0xe1, 0xe2, 0xe3,
+    0xe4, 0xe5, 0xe6, 0xe7, 0xe8, 0xe9, 0xea, 0xf1, 0xf2, 0xf3, 0xf4, 0xf5, 0xf6, 0xf7, 0xf8, 0xf9,
+    0xfa, 0x01, 0x00, 0x03, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x00, 0x00, 0x00,
+    0x00, 0x00, 0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x0a, 0x0b, 0x11, 0x00,
+    0x02, 0x01, 0x02, 0x04, 0x04, 0x03, 0x04, 0x07, 0x05, 0x04, 0x04, 0x00, 0x01, 0x02, 0x77, 0x00,
+    0x01, 0x02, 0x03, 0x11, 0x04, 0x05, 0x21, 0x31, 0x06, 0x12, 0x41, 0x51, 0x07, 0x61, 0x71, 0x13,
+    0x22, 0x32, 0x81, 0x08, 0x14, 0x42, 0x91, 0xa1, 0xb1, 0xc1, 0x09, 0x23, 0x33, 0x52, 0xf0, 0x15,
+    0x62, 0x72, 0xd1, 0x0a, 0x16, 0x24, 0x34, 0xe1, 0x25, 0xf1, 0x17, 0x18, 0x19, 0x1a, 0x26, 0x27,
+    0x28, 0x29, 0x2a, 0x35, 0x36, 0x37, 0x38, 0x39, 0x3a, 0x43, 0x44, 0x45, 0x46, 0x47, 0x48, 0x49,
+    0x4a, 0x53, 0x54, 0x55, 0x56, 0x57, 0x58, 0x59, 0x5a, 0x63, 0x64, 0x65, 0x66, 0x67, 0x68, 0x69,
+    0x6a, 0x73, 0x74, 0x75, 0x76, 0x77, 0x78, 0x79, 0x7a, 0x82, 0x83, 0x84, 0x85, 0x86, 0x87, 0x88,
+    0x89, 0x8a, 0x92, 0x93, 0x94, 0x95, 0x96, 0x97, 0x98, 0x99, 0x9a, 0xa2, 0xa3, 0xa4, 0xa5, 0xa6,
+    0xa7, 0xa8, 0xa9, 0xaa, 0xb2, 0xb3, 0xb4, 0xb5, 0xb6, 0xb7, 0xb8, 0xb9, 0xba, 0xc2, 0xc3, 0xc4,
+    0xc5, 0xc6, 0xc7, 0xc8, 0xc9, 0xca, 0xd2, 0xd3, 0xd4, 0xd5, 0xd6, 0xd7, 0xd8, 0xd9, 0xda, 0xe2,
+    0xe3, 0xe4, 0xe5, 0xe6, 0xe7, 0xe8, 0xe9, 0xea, 0xf2, 0xf3, 0xf4, 0xf5, 0xf6, 0xf7, 0xf8, 0xf9,
+    0xfa, 0xff, 0xda, 0x00, 0x0c, 0x03, 0x01, 0x00, 0x02, 0x11, 0x03, 0x11, 0x00, 0x3f, 0x00, 0xab,
+    0x45, 0x14, 0x57, 0xe1, 0xe7, 0xf4, 0x81, 0xff, 0xd9};
+// clang-format on
+
+TEST_CASE("read_image: a JPEG decodes to RGB (a flat colour survives the lossy coding)") {
+    TempDir dir;
+    put_file(dir / "f.jpg", std::string(std::begin(flat_jpeg), std::end(flat_jpeg)));
+    const isin::Image back = isin::read_image(dir / "f.jpg");
+    REQUIRE(back.width() == 8);
+    REQUIRE(back.height() == 8);
+    for (const auto& p : back.pixels()) {
+        CHECK(std::abs(p.r - 200) <= 3);
+        CHECK(std::abs(p.g - 100) <= 3);
+        CHECK(std::abs(p.b - 50) <= 3);
+    }
+}
+#endif
+
+TEST_CASE("write_image: format by extension in any case; other extensions throw invalid_argument") {
+    TempDir dir;
+    const isin::Image image = gradient(3, 3);
+    isin::write_image(image, dir / "x.PpM");
+    CHECK(file_bytes(dir / "x.PpM").at(1) == '6');
+#if ISIN_HAVE_STB
+    isin::write_image(image, dir / "y.PNG");
+    CHECK(isin::read_image(dir / "y.PNG").pixels() == image.pixels());
+#endif
+    CHECK(contains(thrown<std::invalid_argument>([&] { isin::write_image(image, dir / "z.jpg"); }), "z.jpg"));
+    CHECK_THROWS_AS(isin::write_image(image, dir / "noext"), std::invalid_argument);
+    CHECK_THROWS_AS(isin::write_image(image, dir / "png"), std::invalid_argument);
+#if ISIN_HAVE_STB
+    CHECK(listing(dir.path) == std::vector<std::string>{"x.PpM", "y.PNG"});
+#else
+    CHECK(listing(dir.path) == std::vector<std::string>{"x.PpM"});
+#endif
+}
+
+TEST_CASE("writing into a missing directory throws runtime_error naming the path, leaves nothing") {
+    TempDir dir;
+    const isin::Image image = gradient(2, 2);
+    const std::string target = dir / "missing/out.ppm";
+    CHECK(contains(thrown<std::runtime_error>([&] { isin::write_ppm(image, target); }), target));
+    CHECK_THROWS_AS(isin::write_image(image, dir / "missing/out.png"), std::runtime_error);
+    CHECK(listing(dir.path).empty());
+}
+
+TEST_CASE("writing onto an existing directory throws runtime_error, removes its temporary") {
+    TempDir dir;
+    fs::create_directory(dir.path / "sub");
+    const isin::Image image = gradient(2, 2);
+    CHECK(contains(thrown<std::runtime_error>([&] { isin::write_ppm(image, dir / "sub"); }), dir / "sub"));
+#if ISIN_HAVE_STB
+    CHECK_THROWS_AS(isin::write_png(image, dir / "sub"), std::runtime_error);
+#endif
+    CHECK(listing(dir.path) == std::vector<std::string>{"sub"});
+    CHECK(fs::is_directory(dir.path / "sub"));
+    CHECK(listing(dir.path / "sub").empty());
+}
+
+TEST_CASE("overwriting a good file replaces it whole; no temporary stays behind") {
+    TempDir dir;
+    isin::write_ppm(gradient(4, 4), dir / "o.ppm");
+    const isin::Image second(3, 2, {7, 7, 7});
+    isin::write_ppm(second, dir / "o.ppm");
+    CHECK(isin::read_image(dir / "o.ppm").pixels() == second.pixels());
+    CHECK(listing(dir.path) == std::vector<std::string>{"o.ppm"});
+}
+
+#if ISIN_TEST_POSIX
+TEST_CASE("a write failing midway (file size limit) leaves the old file untouched, no temporary") {
+    TempDir dir;
+    const std::string target = dir / "good.ppm";
+    isin::write_ppm(gradient(4, 4), target);
+    const auto before = file_bytes(target);
+
+    // Files may grow to 1000 bytes; the new image needs 30 015. Works as root too.
+    rlimit old_limit{};
+    REQUIRE(getrlimit(RLIMIT_FSIZE, &old_limit) == 0);
+    rlimit small = old_limit;
+    small.rlim_cur = 1000;
+    const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+    REQUIRE(setrlimit(RLIMIT_FSIZE, &small) == 0);
+    std::string message;
+    try {
+        isin::write_ppm(isin::Image(100, 100, {1, 2, 3}), target);
+    } catch (const std::runtime_error& e) {
+        message = e.what();
+    }
+    setrlimit(RLIMIT_FSIZE, &old_limit);
+    std::signal(SIGXFSZ, old_handler);
+
+    CHECK(contains(message, target));
+    CHECK(file_bytes(target) == before);
+    CHECK(listing(dir.path) == std::vector<std::string>{"good.ppm"});
+}
+
+TEST_CASE("writing into a read-only directory throws runtime_error and leaves nothing") {
+    if (geteuid() == 0) {
+        MESSAGE("skipped: running as root, permissions do not stop writes");
+        return;
+    }
+    TempDir dir;
+    fs::create_directory(dir.path / "ro");
+    fs::permissions(dir.path / "ro", fs::perms::owner_read | fs::perms::owner_exec);
+    CHECK_THROWS_AS(isin::write_ppm(gradient(2, 2), dir / "ro/out.ppm"), std::runtime_error);
+    fs::permissions(dir.path / "ro", fs::perms::owner_all);
+    CHECK(listing(dir.path / "ro").empty());
+}
+#endif
+
+TEST_CASE("read_image: missing, garbage, truncated or directory paths throw naming the path") {
+    TempDir dir;
+    const std::string missing = dir / "nothing.png";
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(missing); }), missing));
+
+    const std::string garbage = dir / "garbage.png";
+    put_file(garbage, "this is not an image at all");
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(garbage); }), garbage));
+
+    const std::string empty = dir / "empty.png";
+    put_file(empty, "");
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(empty); }), empty));
+
+    const std::string truncated = dir / "short.ppm";
+    put_file(truncated, "P6\n4 4\n255\nabc");
+    const std::string why = thrown<std::runtime_error>([&] { (void)isin::read_image(truncated); });
+    CHECK(contains(why, truncated));
+    CHECK(contains(why, "truncated"));
+
+    const std::string huge = dir / "huge.ppm";
+    put_file(huge, "P6\n40000 1\n255\n");
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(huge); }), huge));
+
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir.path.string()); }),
+                   dir.path.string()));
+}
