@@ -52,21 +52,22 @@ template <class T>
     const T a = dot(Rd, Rd);
     if (!(a > T(0)) || !(a < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
     if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
+    const T inv_a = T(1) / a;                            // 1 for the note's unit Rd
     const Vertex<T> l = sp.center - ray.origin;          // §6: l = C − Ro
-    const T s = dot(l, Rd) / a;                          // §6: s = l·Rd (closest approach)
+    const T s = dot(l, Rd) * inv_a;                      // §6: s = l·Rd (closest approach)
     const T l2 = dot(l, l);                              // §6: l2 = l·l
     const T r2 = sp.radius * sp.radius;                  // §6: r2 = r²
+    if (s < T(0) && l2 > r2) return Hit<T>::miss();      // §6: behind an outside (or leaving) origin
     const Vertex<T> m = l - s * Rd;
     const T m2 = dot(m, m);                              // §6: m2 = l2 − s², as |l − s·Rd|² (RTG 7)
     if (!(m2 <= r2)) return Hit<T>::miss();              // §6: m2 > r2 → passes aside; NaN → miss
-    const T q = std::sqrt((r2 - m2) / a);                // §6: q = √(r2 − m2)
-    const T c = (l2 - r2) / a;                           // t_near · t_far
+    const T q = std::sqrt((r2 - m2) * inv_a);            // §6: q = √(r2 − m2)
+    const T c = (l2 - r2) * inv_a;                       // t_near · t_far
     T t;
     if (std::fabs(l2 - r2) <= surface_band(sp, ray.origin)) { // §8 fix, scale-relative: on the surface
         if (!(s > T(0))) return Hit<T>::miss();          // leaving the sphere: no self-hit
         t = s + q;                                       // entering: the far side
-    } else if (l2 > r2) {                                // §6: origin outside
-        if (s < T(0)) return Hit<T>::miss();             // §6: s < 0 && l2 > r2 → behind
+    } else if (l2 > r2) {                                // §6: origin outside (s ≥ 0 here)
         t = c / (s + q);                                 // §6: t = s − q, without cancellation
     } else {
         t = s >= T(0) ? s + q : c / (s - q);             // §6: origin inside → t = s + q

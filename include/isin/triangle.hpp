@@ -114,8 +114,8 @@ template <class T>
     return detail::intersect_area_with(
         ray, tri, [&tri](T S, const Vertex<T>& R, const Vertex<T>& e1, const Vertex<T>& e2) {
             constexpr T eps = std::numeric_limits<T>::epsilon();
-            const T L = std::fmax(max_abs(e1), max_abs(e2));
-            const T M = std::fmax(max_abs(R), max_abs(tri.v0));
+            const T L = max_of(max_abs(e1), max_abs(e2));
+            const T M = max_of(max_abs(R), max_abs(tri.v0));
             return T(32) * eps * (S + T(4) * L * M);
         });
 }
@@ -132,16 +132,22 @@ template <class T>
     const Vertex<T> p = cross(ray.direction, e2);      // MT: P = Rd × E2
     const T det = dot(e1, p);                          // MT: det = E1·P = −N·Rd
     if (cull_backfaces ? !(det > T(0)) : !(det != T(0))) return Hit<T>::miss(); // §11: det ≤ 0 → backface
-    const T inv_det = T(1) / det;
+    // u, v, t are compared scaled by |det|; the division waits for the hit path.
+    const T sign = det < T(0) ? T(-1) : T(1);
+    const T abs_det = det * sign;
     const Vertex<T> s = ray.origin - tri.v0;           // MT: S = Ro − V0
-    const T u = dot(s, p) * inv_det;                   // MT: u = S·P / det
-    if (!(u >= T(0) && u <= T(1))) return Hit<T>::miss();
+    const T U = dot(s, p) * sign;                      // MT: u = S·P / det
+    if (!(U >= T(0) && U <= abs_det)) return Hit<T>::miss();
     const Vertex<T> q = cross(s, e1);                  // MT: Q = S × E1
-    const T v = dot(ray.direction, q) * inv_det;       // MT: v = Rd·Q / det
-    if (!(v >= T(0) && u + v <= T(1))) return Hit<T>::miss();
-    const T t = dot(e2, q) * inv_det;                  // MT: t = E2·Q / det
+    const T V = dot(ray.direction, q) * sign;          // MT: v = Rd·Q / det
+    if (!(V >= T(0) && U + V <= abs_det)) return Hit<T>::miss();
+    const T tt = dot(e2, q) * sign;                    // MT: t = E2·Q / det
+    if (!(tt > T(0))) return Hit<T>::miss();
+    const T inv_det = T(1) / abs_det;
+    const T t = tt * inv_det;
     if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
     if (detail::is_degenerate(e1, e2, cross(e1, e2))) return Hit<T>::miss(); // hit path only
+    const T u = U * inv_det, v = V * inv_det;
     return Hit<T>::at(t, u, v);
 }
 

@@ -69,10 +69,17 @@ template <class T>
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
 
+/// The larger of a and b; a plain comparison (std::fmax is a library call on x86). NaN in b
+/// yields a, NaN in a yields b — callers only use it for magnitudes that feed NaN-rejecting tests.
+template <class T>
+[[nodiscard]] constexpr T max_of(T a, T b) noexcept {
+    return a < b ? b : a;
+}
+
 /// Largest absolute component (the max norm), a cheap magnitude for scale-relative tolerances.
 template <class T>
 [[nodiscard]] inline T max_abs(const Vertex<T>& a) noexcept {
-    return std::fmax(std::fabs(a.x), std::fmax(std::fabs(a.y), std::fabs(a.z)));
+    return max_of(std::fabs(a.x), max_of(std::fabs(a.y), std::fabs(a.z)));
 }
 
 } // namespace isin
