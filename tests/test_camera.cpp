@@ -86,3 +86,17 @@ TEST_CASE("§3 a non-finite pose is ignored") {
     cam.set_pose({1, 2, 3}, HUGE_VAL, 0);
     CHECK(cam.position() == isin::Vec3d{0, 0, 0});
 }
+
+TEST_CASE_TEMPLATE("§3 look_at turns the camera towards a target", T, float, double) {
+    const auto cam = isin::Camera<T>::look_at(800, 450, {0, 60, 80}, {0, 0, 0});
+    const auto f = cam.forward();
+    CHECK(f.x == approx(0).epsilon(1e-6));
+    CHECK(f.y == approx(-0.6));
+    CHECK(f.z == approx(-0.8));
+    CHECK(isin::dot(cam.right(), f) == approx(0).epsilon(1e-6));
+    CHECK(cam.up().y > T(0)); // no roll: up stays up
+    const auto centre = cam.primary_ray(T(399.5), T(224.5));
+    CHECK(centre.direction.y == approx(-0.6));
+    const auto same = isin::Camera<T>::look_at(800, 450, {1, 2, 3}, {1, 2, 3});
+    CHECK(same.forward() == isin::Vertex<T>{0, 0, 1});
+}

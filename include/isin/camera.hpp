@@ -1,5 +1,6 @@
 #pragma once
 /// isin — the pinhole camera of note §3: eye, a 16×9 image plane at distance 10, primary rays.
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -29,6 +30,16 @@ public:
     Camera(int width, int height, const Vertex<T>& position, T yaw, T pitch)
         : width_(checked_side(width, "width")), height_(checked_side(height, "height")) {
         set_pose(position, yaw, pitch);
+    }
+
+    /// A camera at `eye` turned to look at `target` (yaw and pitch from the direction; no roll).
+    /// If eye and target coincide or are not finite, it looks along +Z.
+    [[nodiscard]] static Camera look_at(int width, int height, const Vertex<T>& eye,
+                                        const Vertex<T>& target) {
+        const Vertex<T> d = normalize(target - eye);
+        const T yaw = std::atan2(d.x, d.z);                       // +Z → 0, +X → +90°
+        const T pitch = std::asin(std::clamp(d.y, T(-1), T(1)));  // up is positive
+        return Camera(width, height, eye, d == Vertex<T>{} ? T(0) : yaw, pitch);
     }
 
     /// Moves and turns the camera. Non-finite values are ignored (the pose stays as it was).

@@ -11,10 +11,27 @@
 ///         std::printf("t = %g, u = %g, v = %g\n", h.t, h.u, h.v);
 ///     if (auto h = isin::intersect(ray, ball)) std::printf("sphere at t = %g\n", h.t); // §6
 ///
-/// Headers, one concept each: vec (§2), ray (§3), hit, camera (§3), triangle (§4, §10), sphere (§6).
+/// Rendering a scene (see examples/note_scene.hpp for a complete one):
+///     isin::Scene<float, isin::Sphere, isin::Triangle> scene;    // only the kinds it uses
+///     auto red = scene.add_material({isin::from_rgb8<float>(255, 0, 0)});
+///     scene.add(ball, red);
+///     scene.add_light({{0, 40, 0}});
+///     isin::write_png(isin::render(scene, cam), "out.png");     // §7 Phong, §9 shadows, §8
+///
+/// Headers, one concept each: vec (§2), ray (§3), hit, camera (§3), triangle (§4, §10),
+/// sphere (§6), color, shading (§7, §8), offset (§9), culling (§11), texture (§10), image,
+/// scene (§5), render (§3–§11).
 #include "camera.hpp"
+#include "color.hpp"
+#include "culling.hpp"
 #include "hit.hpp"
+#include "image.hpp"
+#include "offset.hpp"
 #include "ray.hpp"
+#include "render.hpp"
+#include "scene.hpp"
+#include "shading.hpp"
 #include "sphere.hpp"
+#include "texture.hpp"
 #include "triangle.hpp"
 #include "vec.hpp"

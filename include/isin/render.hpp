@@ -1,0 +1,201 @@
+#pragma once
+/// isin — a Whitted-style renderer (note §3, §7–§11): primary rays per pixel, Phong shading with
+/// shadow rays, recursive reflection and transmission, optional supersampling and backface
+/// culling, multi-threaded over rows.
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#if defined(__unix__) || defined(__APPLE__)
+#include <unistd.h>
+#define ISIN_HAVE_ISATTY 1
+#endif
+
+#include "camera.hpp"
+#include "color.hpp"
+#include "culling.hpp"
+#include "image.hpp"
+#include "offset.hpp"
+#include "scene.hpp"
+#include "shading.hpp"
+
+namespace isin {
+
+/// Which backface test culls triangles for primary rays (§11); shadow, reflected and refracted
+/// rays always see both faces.
+enum class Culling { none, dot_product, projected };
+
+/// Options of `render`.
+struct RenderOptions {
+    int threads = 0;                 ///< worker threads; 0 = std::thread::hardware_concurrency()
+    int samples = 1;                 ///< N×N rays per pixel (1 = the note's one ray per pixel)
+    int max_depth = 4;               ///< longest chain of reflected/transmitted rays
+    bool shadows = true;             ///< cast shadow rays (§9)
+    Culling culling = Culling::none; ///< backface culling for primary rays (§11)
+    bool progress = true;            ///< progress bar on stderr, when it is a terminal and the render takes > 1 s
+};
+
+/// Rays a render traced, by kind, and its wall time.
+struct RenderStats {
+    std::uint64_t primary = 0, shadow = 0, reflection = 0, refraction = 0;
+    double seconds = 0;
+    [[nodiscard]] std::uint64_t rays() const noexcept { return primary + shadow + reflection + refraction; }
+    [[nodiscard]] double mrays_per_second() const noexcept { return seconds > 0 ? double(rays()) / seconds * 1e-6 : 0; }
+    RenderStats& operator+=(const RenderStats& o) noexcept {
+        primary += o.primary; shadow += o.shadow; reflection += o.reflection; refraction += o.refraction;
+        return *this;
+    }
+};
+
+/// Per-kind masks of triangles that are backfaces for the camera (§11); spheres are never culled.
+template <class T, template <class> class... S>
+[[nodiscard]] std::array<std::vector<std::uint8_t>, sizeof...(S)>
+backface_masks(const Scene<T, S...>& scene, const Camera<T>& cam, Culling culling) {
+    std::array<std::vector<std::uint8_t>, sizeof...(S)> masks;
+    if (culling == Culling::none) return masks;
+    scene.for_each_kind([&](auto kind, const auto& objects) {
+        if (objects.empty() || !triangle_of(objects.front().shape)) return;
+        auto& mask = masks[kind];
+        mask.resize(objects.size());
+        for (std::size_t i = 0; i < objects.size(); ++i) {
+            const Triangle<T>& tri = *triangle_of(objects[i].shape);
+            mask[i] = culling == Culling::dot_product
+                          ? is_backface(tri, cam.position())                                  // §11 method 1
+                          : is_backface_projected(to_camera_space(cam, tri), cam.plane_distance); // §11 method 2
+        }
+    });
+    return masks;
+}
+
+/// The colour seen along `ray` (unit direction): nearest hit (§5), Phong with shadows (§7, §9),
+/// reflection and transmission (§8) up to `max_depth`. `skip` culls objects (primary rays only).
+template <class T, template <class> class... S>
+[[nodiscard]] Color<T> trace(const Scene<T, S...>& scene, const Ray<T>& ray, int depth,
+                             const RenderOptions& opt, RenderStats& stats,
+                             const std::array<std::vector<std::uint8_t>, sizeof...(S)>* skip = nullptr) {
+    const SceneHit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
+    if (!sh) return scene.background;
+    const SurfacePoint<T> sp = scene.surface(ray, sh);
+    const Material<T>& m = scene.materials[sp.material];
+    const Color<T> object = m.texture >= 0 && sp.has_texture_coordinates
+                                ? sample(scene.textures[std::size_t(m.texture)], sp.st[0], sp.st[1], scene.texture_filter)
+                                : m.color;
+    const Vertex<T>& d = ray.direction;
+    const bool entering = dot(sp.normal, d) < T(0);
+    const Vertex<T> Nf = entering ? sp.normal : -sp.normal; // the normal on the ray's side
+    const Vertex<T> V = -d;                                  // §7: towards the eye
+
+    Color<T> local = m.ka * object * scene.ambient_light; // §7: ambient
+    const T scale = max_abs(ray.origin); // the hit point's rounding grows with it
+    const Vertex<T> above = offset_origin(sp.point, Nf, scale);
+    for (const PointLight<T>& light : scene.lights) {
+        const Vertex<T> to_light = light.position - sp.point;
+        const Vertex<T> L = normalize(to_light);
+        if (!(dot(Nf, L) > T(0))) continue; // §7: facing away → unlit, no shadow ray needed
+        T visible = T(1);
+        if (opt.shadows) { // §9: a ray towards the light; anything nearer than the light shadows
+            ++stats.shadow;
+            visible = scene.transmittance(Ray<T>{above, light.position - above}, T(1));
+        }
+        if (visible > T(0)) local += visible * phong_light(m, object, Nf, L, V, light.color);
+    }
+    if (depth >= opt.max_depth || (m.reflectivity <= T(0) && m.transparency <= T(0))) return local;
+
+    Color<T> result = std::max(T(0), T(1) - m.reflectivity - m.transparency) * local;
+    if (m.reflectivity > T(0)) { // §8: Rd − 2(Rd·N)N from the hit point
+        ++stats.reflection;
+        result += m.reflectivity * trace(scene, Ray<T>{above, reflect(d, Nf)}, depth + 1, opt, stats);
+    }
+    if (m.transparency > T(0)) { // §8: straight through (ior = 1) or bent by Snell's law
+        Vertex<T> dir = d;
+        bool reflected = false;
+        if (m.ior != T(1)) {
+            const T eta = entering ? T(1) / m.ior : m.ior; // n1/n2
+            if (const auto r = refract(d, Nf, eta)) dir = normalize(*r);
+            else dir = reflect(d, Nf), reflected = true; // total internal reflection
+        }
+        ++stats.refraction;
+        const Vertex<T> origin = reflected ? above : offset_origin(sp.point, -Nf, scale);
+        result += m.transparency * trace(scene, Ray<T>{origin, dir}, depth + 1, opt, stats);
+    }
+    return result;
+}
+
+/// Renders `scene` as seen by `camera` into a camera.width() × camera.height() image.
+/// Throws std::invalid_argument for samples outside [1, 16], negative threads or max_depth.
+template <class T, template <class> class... S>
+[[nodiscard]] Image render(const Scene<T, S...>& scene, const Camera<T>& camera,
+                           const RenderOptions& opt = {}, RenderStats* stats_out = nullptr) {
+    if (opt.samples < 1 || opt.samples > 16)
+        throw std::invalid_argument("isin::render: samples " + std::to_string(opt.samples) + " is outside [1, 16]");
+    if (opt.threads < 0 || opt.max_depth < 0)
+        throw std::invalid_argument("isin::render: threads and max_depth must not be negative");
+    const auto start = std::chrono::steady_clock::now();
+    const int W = camera.width(), H = camera.height(), N = opt.samples;
+    Image image(W, H);
+    const auto masks = backface_masks(scene, camera, opt.culling);
+    const auto* skip = opt.culling == Culling::none ? nullptr : &masks;
+
+    int threads = opt.threads > 0 ? opt.threads : int(std::thread::hardware_concurrency());
+    threads = std::clamp(threads, 1, H);
+    std::atomic<int> next_row{0}, rows_done{0};
+    std::mutex stats_mutex;
+    RenderStats total;
+#ifdef ISIN_HAVE_ISATTY
+    const bool show_progress = opt.progress && isatty(STDERR_FILENO);
+#else
+    const bool show_progress = false;
+#endif
+    bool progress_shown = false;
+
+    auto work = [&](bool reporter) {
+        RenderStats local;
+        auto last_report = start;
+        for (int y; (y = next_row.fetch_add(1)) < H;) {
+            for (int x = 0; x < W; ++x) {
+                Color<T> sum{T(0), T(0), T(0)};
+                for (int sy = 0; sy < N; ++sy)
+                    for (int sx = 0; sx < N; ++sx) {
+                        const T px = T(x) + (T(sx) + T(0.5)) / T(N) - T(0.5);
+                        const T py = T(y) + (T(sy) + T(0.5)) / T(N) - T(0.5);
+                        ++local.primary;
+                        sum += trace(scene, camera.primary_ray(px, py), 0, opt, local, skip); // §3
+                    }
+                image(x, y) = to_rgb8(sum / T(N * N));
+            }
+            const int done = rows_done.fetch_add(1) + 1;
+            if (reporter && show_progress) {
+                const auto now = std::chrono::steady_clock::now();
+                if (now - start > std::chrono::seconds(1) && now - last_report > std::chrono::milliseconds(100)) {
+                    last_report = now;
+                    progress_shown = true;
+                    const int filled = 40 * done / H;
+                    std::fprintf(stderr, "\r[%.*s%*s] %3d%%", filled, "########################################",
+                                 40 - filled, "", 100 * done / H);
+                    std::fflush(stderr);
+                }
+            }
+        }
+        const std::lock_guard<std::mutex> lock(stats_mutex);
+        total += local;
+    };
+    std::vector<std::thread> pool;
+    pool.reserve(std::size_t(threads - 1));
+    for (int i = 1; i < threads; ++i) pool.emplace_back(work, false);
+    work(true);
+    for (auto& t : pool) t.join();
+    if (progress_shown) std::fprintf(stderr, "\r[%s] 100%%\n", "########################################");
+    total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (stats_out) *stats_out = total;
+    return image;
+}
+
+} // namespace isin

@@ -1,0 +1,90 @@
+#pragma once
+/// isin — Phong shading (note §7), refraction by Snell's law (§8), materials and lights.
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "color.hpp"
+#include "vec.hpp"
+
+namespace isin {
+
+/// Surface properties. The note's Phong weights satisfy ka + kd + ks = 1 (§7); reflectivity and
+/// transparency in [0,1] mix in the colour seen along the reflected and transmitted rays (§8):
+/// final = (1 − reflectivity − transparency)·local + reflectivity·reflected + transparency·transmitted.
+/// With ior = 1 a transparent surface lets the ray straight through, as the note says; any other
+/// index of refraction bends it by Snell's law. `texture` indexes the scene's textures (−1: none).
+template <class T>
+struct Material {
+    static_assert(std::is_floating_point_v<T>, "isin::Material needs a floating-point type");
+    Color<T> color{T(1), T(1), T(1)};
+    T ka = T(0.1), kd = T(0.7), ks = T(0.2); // §7: ka + kd + ks = 1
+    T shininess = T(32);                     // §7: specular exponent
+    T reflectivity = T(0);                   // §8: weight of the reflected colour, [0,1]
+    T transparency = T(0);                   // §8: weight of the transmitted colour, [0,1]
+    T ior = T(1);                            // §8: index of refraction; 1 = straight through
+    int texture = -1;                        // §10: index into the scene's textures, −1 = none
+};
+
+/// A point light with a colour (white by default).
+template <class T>
+struct PointLight {
+    Vertex<T> position;
+    Color<T> color{T(1), T(1), T(1)};
+};
+
+/// Diffuse coefficient (§7): N·L for unit N and L (L from the point to the light); negative → 0.
+template <class T>
+[[nodiscard]] constexpr T diffuse_coefficient(const Vertex<T>& N, const Vertex<T>& L) noexcept {
+    const T c = dot(N, L); // §7: cos of the angle between N and L
+    return c > T(0) ? c : T(0); // §7: facing away from the light → unlit
+}
+
+/// Diffuse colour (§7): coefficient × object colour.
+template <class T>
+[[nodiscard]] constexpr Color<T> diffuse(const Vertex<T>& N, const Vertex<T>& L,
+                                         const Color<T>& object) noexcept {
+    return diffuse_coefficient(N, L) * object; // §7: N·L × colour
+}
+
+/// Specular coefficient (§7): reflect the light-to-surface direction −L about N
+/// (Rf = d − 2(d·N)N), take its cosine with V (unit, towards the eye), raise it to `shininess`.
+template <class T>
+[[nodiscard]] inline T specular_coefficient(const Vertex<T>& N, const Vertex<T>& L,
+                                            const Vertex<T>& V, T shininess) noexcept {
+    const Vertex<T> Rf = reflect(-L, N);       // §7: Rf = d − 2(d·N)N with d = −L
+    const T c = dot(Rf, V);                     // §7: cos(Rf, V)
+    return c > T(0) ? std::pow(c, shininess) : T(0); // §7: cos^shininess
+}
+
+/// Ambient colour (§7): object colour × a coefficient in [0,1].
+template <class T>
+[[nodiscard]] constexpr Color<T> ambient(const Color<T>& object, T coefficient) noexcept {
+    return coefficient * object; // §7: ambient
+}
+
+/// One light's Phong contribution (§7) at a point with unit normal N, unit L towards the light
+/// and unit V towards the eye: kd·diffuse + ks·specular, both tinted by the light's colour.
+template <class T>
+[[nodiscard]] inline Color<T> phong_light(const Material<T>& m, const Color<T>& object,
+                                          const Vertex<T>& N, const Vertex<T>& L,
+                                          const Vertex<T>& V, const Color<T>& light) noexcept {
+    const T NdotL = diffuse_coefficient(N, L);
+    if (NdotL <= T(0)) return {T(0), T(0), T(0)};
+    return (m.kd * NdotL * object + m.ks * specular_coefficient(N, L, V, m.shininess) *
+                                        Color<T>{T(1), T(1), T(1)}) * light; // §7: kd·diffuse + ks·specular
+}
+
+/// Refracted direction by Snell's law (§8), n1 sin θ1 = n2 sin θ2, for a unit direction d and a
+/// unit normal n facing against d (d·n ≤ 0); eta = n1 / n2. Empty on total internal reflection.
+template <class T>
+[[nodiscard]] inline std::optional<Vertex<T>> refract(const Vertex<T>& d, const Vertex<T>& n,
+                                                      T eta) noexcept {
+    const T cos_i = -dot(d, n);
+    const T sin2_t = eta * eta * (T(1) - cos_i * cos_i);  // §8: sin²θ2 = (n1/n2)² sin²θ1
+    if (!(sin2_t <= T(1))) return std::nullopt;           // §8: total internal reflection (or NaN)
+    const T cos_t = std::sqrt(T(1) - sin2_t);
+    return eta * d + (eta * cos_i - cos_t) * n;
+}
+
+} // namespace isin

@@ -1,0 +1,187 @@
+// The renderer on the note's scene (§3, §5, §7–§11), scenes, and acne-free secondary rays.
+#include <isin/render.hpp>
+
+#include <doctest/doctest.h>
+
+#include "approx.hpp"
+#include "../examples/note_scene.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <random>
+#include <stdexcept>
+
+namespace {
+
+bool is_blue(const isin::Rgb8& p) { return p.b > 3 * p.r && p.b > 3 * p.g && p.b > 100; }
+int brightness(const isin::Rgb8& p) { return p.r + p.g + p.b; }
+
+} // namespace
+
+TEST_CASE("scene: a scene stores only the primitive kinds it names") {
+    using Spheres = isin::Scene<float, isin::Sphere>;
+    using Everything = isin::Scene<float, isin::Sphere, isin::Triangle, isin::TexturedTriangle>;
+    static_assert(Spheres::kinds == 1 && Everything::kinds == 3);
+    static_assert(sizeof(Spheres) < sizeof(Everything));
+    static_assert(sizeof(isin::Object<isin::Sphere<float>>) == 5 * sizeof(float));
+    Spheres scene;
+    const auto m = scene.add_material({});
+    scene.add(isin::Sphere<float>{{0, 0, 50}, 5}, m);
+    CHECK(scene.size() == 1);
+    CHECK_THROWS_AS(scene.add(isin::Sphere<float>{{0, 0, 50}, 5}, 7), std::out_of_range);
+    const auto hit = scene.intersect(isin::Ray<float>{{0, 0, 0}, {0, 0, 1}});
+    REQUIRE(hit);
+    CHECK(hit.hit.t == approx(45));
+}
+
+TEST_CASE_TEMPLATE("§5 scene: nearest hit of example 5a is blue Z at t = 77, both triangle methods", T,
+                   float, double) {
+    auto scene = note_scene::make<T>();
+    const isin::Ray<T> ray{{0, 0, 0}, {0, 0, 1}}; // through (0,0,10)
+    for (auto method : {isin::TriangleMethod::moller_trumbore, isin::TriangleMethod::area}) {
+        scene.triangle_method = method;
+        const auto h = scene.intersect(ray);
+        REQUIRE(h);
+        CHECK(h.kind == 1);  // isin::Triangle
+        CHECK(h.index == 2); // blue Z
+        CHECK(h.hit.t == approx(77));
+    }
+}
+
+TEST_CASE("§3 §5 render at 800×450: the pixels around GD = (0,0,10) show blue triangle Z") {
+    const auto scene = note_scene::make<float>();
+    const isin::Camera<float> cam{800, 450};
+    isin::RenderOptions opt;
+    opt.progress = false;
+    const auto image = isin::render(scene, cam, opt);
+    REQUIRE(image.width() == 800);
+    REQUIRE(image.height() == 450);
+    // GD = (0,0,10) falls between pixels 399/400 and 224/225 (16·x/799 − 8 = 0 at x = 399.5).
+    for (int y : {224, 225})
+        for (int x : {399, 400}) {
+            CAPTURE(x);
+            CAPTURE(y);
+            const auto ray = cam.primary_ray(float(x), float(y));
+            const auto h = scene.intersect(ray);
+            REQUIRE(h);
+            CHECK(h.index == 2);
+            CHECK(is_blue(image(x, y)));
+        }
+}
+
+TEST_CASE("§9 render: a floor pixel in a known shadow is darker than its lit neighbour") {
+    const auto scene = note_scene::make<float>(false); // plain floor: shadow is the only change
+    const isin::Camera<float> cam{800, 450};
+    isin::RenderOptions opt;
+    opt.progress = false;
+    const auto image = isin::render(scene, cam, opt);
+    // Find a floor pixel that an opaque object hides from the first light, and whose neighbour four
+    // pixels to the right the light sees.
+    auto light0_visible = [&](int x, int y, bool& on_floor) {
+        const auto ray = cam.primary_ray(float(x), float(y));
+        const auto h = scene.intersect(ray);
+        on_floor = h && h.kind == 2; // isin::TexturedTriangle: the floor
+        if (!on_floor) return false;
+        const auto p = isin::offset_origin(ray.at(h.hit.t), isin::Vec3f{0, 1, 0});
+        const auto& light = scene.lights[0].position;
+        const auto& light1 = scene.lights[1].position;
+        // Light 1 must see both pixels, so light 0 alone makes the difference.
+        if (scene.transmittance({p, light1 - p}, 1.0f) < 1.0f) on_floor = false;
+        const float through = scene.transmittance({p, light - p}, 1.0f);
+        if (through > 0.0f && through < 1.0f) on_floor = false; // behind glass: partly lit
+        return through == 1.0f;
+    };
+    int pairs = 0;
+    for (int y = 300; y < 450 && pairs < 20; y += 3)
+        for (int x = 0; x + 4 < 800 && pairs < 20; ++x) {
+            bool floor_a = false, floor_b = false;
+            const bool lit_a = light0_visible(x, y, floor_a);
+            const bool lit_b = light0_visible(x + 4, y, floor_b);
+            if (floor_a && floor_b && !lit_a && lit_b) {
+                CAPTURE(x);
+                CAPTURE(y);
+                CHECK(brightness(image(x, y)) + 30 < brightness(image(x + 4, y)));
+                ++pairs;
+            }
+        }
+    CHECK(pairs >= 5); // the mirror sphere's and triangles' shadows do fall on the floor
+}
+
+TEST_CASE("render: float and double images of the note's scene differ in < 0.5% of pixels") {
+    const isin::Camera<float> cam_f{800, 450};
+    const isin::Camera<double> cam_d{800, 450};
+    isin::RenderOptions opt;
+    opt.progress = false;
+    const auto f = isin::render(note_scene::make<float>(), cam_f, opt);
+    const auto d = isin::render(note_scene::make<double>(), cam_d, opt);
+    long differ = 0;
+    for (int y = 0; y < 450; ++y)
+        for (int x = 0; x < 800; ++x) {
+            const auto a = f(x, y), b = d(x, y);
+            differ += std::abs(a.r - b.r) > 1 || std::abs(a.g - b.g) > 1 || std::abs(a.b - b.b) > 1;
+        }
+    MESSAGE("float vs double: " << differ << " of 360000 pixels differ by more than one level");
+    CHECK(double(differ) < 0.005 * 360000);
+}
+
+TEST_CASE("render: threads, supersampling and culling options") {
+    const auto scene = note_scene::make<float>();
+    const isin::Camera<float> cam{160, 90};
+    isin::RenderOptions opt;
+    opt.progress = false;
+    opt.threads = 1;
+    isin::RenderStats one_stats, two_stats;
+    const auto one = isin::render(scene, cam, opt, &one_stats);
+    opt.threads = 2;
+    const auto two = isin::render(scene, cam, opt, &two_stats);
+    CHECK(one.pixels() == two.pixels()); // deterministic whatever the thread count
+    CHECK(one_stats.primary == 160 * 90);
+    CHECK(one_stats.rays() == two_stats.rays());
+    CHECK(one_stats.shadow > 0);
+    CHECK(one_stats.reflection > 0);
+    CHECK(one_stats.refraction > 0);
+    opt.samples = 3;
+    isin::RenderStats ss;
+    const auto smooth = isin::render(scene, cam, opt, &ss);
+    CHECK(ss.primary == 9 * 160 * 90);
+    CHECK(smooth.pixels() != one.pixels());
+    // Every face of the note's scene faces the eye, so culling changes nothing here…
+    opt.samples = 1;
+    for (auto c : {isin::Culling::dot_product, isin::Culling::projected}) {
+        opt.culling = c;
+        CHECK(isin::render(scene, cam, opt).pixels() == one.pixels());
+    }
+    opt.culling = isin::Culling::none;
+    opt.samples = 0;
+    CHECK_THROWS_AS((void)isin::render(scene, cam, opt), std::invalid_argument);
+    opt.samples = 1;
+    opt.threads = -1;
+    CHECK_THROWS_AS((void)isin::render(scene, cam, opt), std::invalid_argument);
+}
+
+TEST_CASE_TEMPLATE("§11 render: both culling methods drop a triangle turned away from the eye", T,
+                   float, double) {
+    // Blue triangle Z of example 5a with two vertices swapped (counter-clockwise: a backface),
+    // in front of a red wall.
+    isin::Scene<T, isin::Triangle> scene;
+    isin::Material<T> blue, red;
+    blue.color = isin::from_rgb8<T>(0, 0, 255);
+    red.color = isin::from_rgb8<T>(255, 0, 0);
+    scene.add(isin::Triangle<T>{{-30, 0, 37}, {30, -40, 117}, {30, 40, 117}}, scene.add_material(blue));
+    const auto wall = scene.add_material(red);
+    scene.add(isin::Triangle<T>{{-500, -500, 300}, {-500, 500, 300}, {500, -500, 300}}, wall);
+    scene.add(isin::Triangle<T>{{500, 500, 300}, {500, -500, 300}, {-500, 500, 300}}, wall);
+    scene.add_light({{0, 0, 0}});
+    const isin::Camera<T> cam{81, 45};
+    isin::RenderOptions opt;
+    opt.progress = false;
+    const auto seen = isin::render(scene, cam, opt)(40, 22);
+    CHECK(seen.b > 0);
+    CHECK(seen.r == 0);
+    for (auto c : {isin::Culling::dot_product, isin::Culling::projected}) {
+        opt.culling = c;
+        const auto culled = isin::render(scene, cam, opt)(40, 22);
+        CHECK(culled.r > 0);
+        CHECK(culled.b == 0);
+    }
+}

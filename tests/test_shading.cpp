@@ -1,0 +1,98 @@
+// Note §7 (Phong: ambient, diffuse, specular) and §8 (refraction by Snell's law).
+#include <isin/shading.hpp>
+
+#include <doctest/doctest.h>
+
+#include "approx.hpp"
+
+#include <cmath>
+
+TEST_CASE_TEMPLATE("§7 example 7a: L = (0,0.8,−0.6), coefficient 0.8, red (255,0,0) → (204,0,0)", T,
+                   float, double) {
+    const isin::Vertex<T> light{0, 40, 0}, N{0, 1, 0}, P{0, 0, 30};
+    const auto L = isin::normalize(light - P);
+    CHECK(L.x == approx(0));
+    CHECK(L.y == approx(0.8));
+    CHECK(L.z == approx(-0.6));
+    CHECK(isin::diffuse_coefficient(N, L) == approx(0.8));
+    const auto red = isin::from_rgb8<T>(255, 0, 0);
+    CHECK(isin::to_rgb8(isin::diffuse(N, L, red)) == isin::Rgb8{204, 0, 0});
+}
+
+TEST_CASE_TEMPLATE("§7 diffuse: a surface facing away from the light is unlit (coefficient 0)", T,
+                   float, double) {
+    const isin::Vertex<T> N{0, -1, 0};
+    const auto L = isin::normalize(isin::Vertex<T>{0, 40, -30});
+    CHECK(isin::dot(N, L) == approx(-0.8));
+    CHECK(isin::diffuse_coefficient(N, L) == T(0));
+    CHECK(isin::to_rgb8(isin::diffuse(N, L, isin::from_rgb8<T>(255, 0, 0))) == isin::Rgb8{0, 0, 0});
+}
+
+// By hand: light (0,40,0), N = (0,1,0), P = (0,0,30) as in 7a, eye at (0,30,60).
+// L = (0,0.8,−0.6); d = −L = (0,−0.8,0.6); Rf = d − 2(d·N)N = (0,0.8,0.6);
+// V = normalize((0,30,60) − P) = (0,1,1)/√2; cos = (0.8 + 0.6)/√2 = 0.98994949;
+// shininess 10: 0.98994949^10 = 0.90392080.
+TEST_CASE_TEMPLATE("§7 specular by hand: Rf = (0,0.8,0.6), cos = 1.4/√2, cos^10 = 0.9039208", T,
+                   float, double) {
+    const isin::Vertex<T> N{0, 1, 0}, P{0, 0, 30};
+    const auto L = isin::normalize(isin::Vertex<T>{0, 40, 0} - P);
+    const auto V = isin::normalize(isin::Vertex<T>{0, 30, 60} - P);
+    const auto Rf = isin::reflect(-L, N);
+    CHECK(Rf.y == approx(0.8));
+    CHECK(Rf.z == approx(0.6));
+    CHECK(isin::specular_coefficient(N, L, V, T(10)) == approx(0.9039208).epsilon(1e-5));
+    // Seen from the eye at the origin the mirror direction points away: no highlight (cos < 0).
+    const auto V0 = isin::normalize(isin::Vertex<T>{0, 0, 0} - P);
+    CHECK(isin::dot(Rf, V0) == approx(-0.6));
+    CHECK(isin::specular_coefficient(N, L, V0, T(10)) == T(0));
+}
+
+TEST_CASE_TEMPLATE("§7 ambient: object colour × coefficient", T, float, double) {
+    const auto c = isin::ambient(isin::from_rgb8<T>(255, 100, 0), T(0.2));
+    CHECK(isin::to_rgb8(c) == isin::Rgb8{51, 20, 0});
+}
+
+TEST_CASE_TEMPLATE("§7 Phong: ka·ambient + kd·diffuse + ks·specular with ka + kd + ks = 1", T, float,
+                   double) {
+    isin::Material<T> m;
+    m.color = isin::from_rgb8<T>(255, 0, 0);
+    m.ka = T(0.1), m.kd = T(0.6), m.ks = T(0.3), m.shininess = T(10);
+    CHECK(m.ka + m.kd + m.ks == approx(1));
+    const isin::Vertex<T> N{0, 1, 0}, P{0, 0, 30};
+    const auto L = isin::normalize(isin::Vertex<T>{0, 40, 0} - P);
+    const auto V = isin::normalize(isin::Vertex<T>{0, 30, 60} - P);
+    const isin::Color<T> white{1, 1, 1};
+    const auto lit = isin::ambient(m.color, m.ka) + isin::phong_light(m, m.color, N, L, V, white);
+    // red: 0.1 + 0.6·0.8 + 0.3·0.9039208 = 0.8511762; green, blue: 0.3·0.9039208 = 0.2711762
+    CHECK(lit.r == approx(0.8511762).epsilon(1e-5));
+    CHECK(lit.g == approx(0.2711762).epsilon(1e-5));
+    CHECK(lit.b == approx(0.2711762).epsilon(1e-5));
+    // A coloured light tints diffuse and specular alike.
+    const auto blue_light = isin::phong_light(m, m.color, N, L, V, isin::Color<T>{0, 0, 1});
+    CHECK(blue_light.r == T(0));
+    CHECK(blue_light.b == approx(0.2711762).epsilon(1e-5));
+    // Facing away from the light: no diffuse and no specular.
+    CHECK(isin::phong_light(m, m.color, -N, L, V, white) == isin::Color<T>{0, 0, 0});
+}
+
+TEST_CASE_TEMPLATE("§8 refraction by Snell's law: n1 sin θ1 = n2 sin θ2, total internal reflection",
+                   T, float, double) {
+    const isin::Vertex<T> n{0, 1, 0};
+    // Normal incidence goes straight through.
+    const auto straight = isin::refract(isin::Vertex<T>{0, -1, 0}, n, T(1) / T(1.5));
+    REQUIRE(straight);
+    CHECK(straight->y == approx(-1));
+    // 45° from air into glass (1.5): sin θ2 = sin 45° / 1.5 = 0.47140452.
+    const auto d = isin::normalize(isin::Vertex<T>{1, -1, 0});
+    const auto into_glass = isin::refract(d, n, T(1) / T(1.5));
+    REQUIRE(into_glass);
+    CHECK(isin::length(*into_glass) == approx(1));
+    CHECK(into_glass->x == approx(0.47140452));
+    CHECK(into_glass->y < T(0));
+    // From glass to air at 45°: 1.5 · sin 45° = 1.06 > 1 → total internal reflection.
+    CHECK_FALSE(isin::refract(d, n, T(1.5)));
+    // The critical angle is asin(1/1.5): sin θ1 = 0.7 lies past it, 0.66 just inside.
+    const T past = T(0.7), inside = T(0.66);
+    CHECK_FALSE(isin::refract(isin::Vertex<T>{past, -std::sqrt(1 - past * past), 0}, n, T(1.5)));
+    CHECK(isin::refract(isin::Vertex<T>{inside, -std::sqrt(1 - inside * inside), 0}, n, T(1.5)));
+}
