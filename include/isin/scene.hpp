@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "batch.hpp"
 #include "color.hpp"
 #include "hit.hpp"
 #include "ray.hpp"
@@ -39,6 +40,7 @@ enum class TriangleMethod { moller_trumbore, area };
 /// An object of a scene: a primitive and the index of its material.
 template <class Shape>
 struct Object {
+    using shape_type = Shape;
     Shape shape;
     std::uint32_t material;
 };
@@ -90,6 +92,17 @@ template <class T> [[nodiscard]] constexpr const Triangle<T>* triangle_of(const 
 template <class T> [[nodiscard]] constexpr const Triangle<T>* triangle_of(const TexturedTriangle<T>& t) noexcept { return &t.triangle; }
 template <class T> [[nodiscard]] constexpr const Triangle<T>* triangle_of(const Sphere<T>&) noexcept { return nullptr; }
 
+/// Whether a primitive kind is a triangle (scenes then also keep it in a TriangleBatch).
+template <class Shape> struct is_triangle_kind : std::false_type {};
+template <class T> struct is_triangle_kind<Triangle<T>> : std::true_type {};
+template <class T> struct is_triangle_kind<TexturedTriangle<T>> : std::true_type {};
+
+namespace detail {
+struct NoBatch {};
+template <class T, class Shape>
+using BatchFor = std::conditional_t<is_triangle_kind<Shape>::value, TriangleBatch<T>, NoBatch>;
+} // namespace detail
+
 /// Normalised texture coordinates of a hit, or none: only textured triangles carry them (§10).
 template <class T, class Shape>
 [[nodiscard]] inline bool texture_coordinates(const Shape&, const Hit<T>&, std::array<T, 2>&) noexcept {
@@ -130,6 +143,11 @@ public:
     Color<T> background{T(0), T(0), T(0)};
     Color<T> ambient_light{T(1), T(1), T(1)}; // multiplies ka·colour (§7)
     TriangleMethod triangle_method = TriangleMethod::moller_trumbore;
+    /// Triangle kinds with at least this many triangles are tested by the vectorised
+    /// TriangleBatch (Möller–Trumbore only); smaller ones one by one. Measured on Zen 4, nearest
+    /// hit of one ray: the batch wins from 4 triangles with -march=native (AVX-512) and from 4–8
+    /// with plain -O3 (SSE2); on the note's scene (3 + 2 triangles) the scalar loop wins.
+    std::size_t batch_min = 8;
 
     /// Adds a material; returns its index.
     std::uint32_t add_material(const Material<T>& m) {
@@ -152,7 +170,9 @@ public:
             throw std::out_of_range("isin::Scene::add: material " + std::to_string(material) +
                                     " does not exist (" + std::to_string(materials.size()) +
                                     " materials)");
-        std::get<std::vector<Object<Shape>>>(objects_).push_back({shape, material});
+        constexpr std::size_t kind = index_of<Shape>();
+        std::get<kind>(objects_).push_back({shape, material});
+        if constexpr (is_triangle_kind<Shape>::value) std::get<kind>(batches_).push_back(*triangle_of(shape));
     }
 
     /// Adds a textured rectangle as the note's two right triangles (§10): corner `v0` (the right
@@ -177,7 +197,8 @@ public:
 
     /// Nearest hit with t in (0, t_max) over all objects (§3, §5: the smallest t is visible).
     /// `skip`, if given, is one mask per kind (empty = none skipped): objects whose mask byte is
-    /// non-zero are ignored — the renderer's backface culling for primary rays.
+    /// non-zero are ignored — the renderer's backface culling for primary rays. Triangles tested
+    /// by Möller–Trumbore go through the vectorised TriangleBatch, others one by one.
     [[nodiscard]] SceneHit<T> intersect(const Ray<T>& ray,
                                         T t_max = std::numeric_limits<T>::infinity(),
                                         const std::array<std::vector<std::uint8_t>, kinds>* skip = nullptr) const noexcept {
@@ -185,6 +206,12 @@ public:
         best.hit.t = t_max;
         for_each_kind([&](auto kind, const auto& vec) {
             const std::uint8_t* mask = skip && !(*skip)[kind].empty() ? (*skip)[kind].data() : nullptr;
+            if constexpr (is_triangle_kind<typename std::decay_t<decltype(vec)>::value_type::shape_type>::value) {
+                if (!mask && triangle_method == TriangleMethod::moller_trumbore && vec.size() >= batch_min) {
+                    if (const auto h = std::get<kind>(batches_).nearest(ray, best.hit.t)) best = {h.hit, kind, h.index};
+                    return;
+                }
+            }
             for (std::size_t i = 0; i < vec.size(); ++i) {
                 if (mask && mask[i]) continue;
                 const Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
@@ -199,7 +226,17 @@ public:
     /// product of the transparencies of the objects crossed otherwise (0 for an opaque one).
     [[nodiscard]] T transmittance(const Ray<T>& ray, T t_max) const noexcept {
         T through = T(1);
-        for_each_kind([&](auto, const auto& vec) {
+        for_each_kind([&](auto kind, const auto& vec) {
+            if (!(through > T(0))) return;
+            if constexpr (is_triangle_kind<typename std::decay_t<decltype(vec)>::value_type::shape_type>::value) {
+                if (triangle_method == TriangleMethod::moller_trumbore && vec.size() >= batch_min) {
+                    std::get<kind>(batches_).each_hit(ray, t_max, [&](std::size_t i, T) {
+                        through *= materials[vec[i].material].transparency;
+                        return through > T(0);
+                    });
+                    return;
+                }
+            }
             for (std::size_t i = 0; i < vec.size() && through > T(0); ++i) {
                 const Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
                 if (h.t < t_max) through *= materials[vec[i].material].transparency;
@@ -229,12 +266,20 @@ public:
     }
 
 private:
+    template <class Shape, std::size_t I = 0>
+    static constexpr std::size_t index_of() {
+        static_assert(I < kinds, "isin::Scene::add: this scene does not hold that primitive kind");
+        if constexpr (std::is_same_v<Shape, std::tuple_element_t<I, std::tuple<Shapes<T>...>>>) return I;
+        else return index_of<Shape, I + 1>();
+    }
+
     template <class F, std::size_t... I>
     void for_each_kind_impl(F& f, std::index_sequence<I...>) const {
         (f(std::integral_constant<std::size_t, I>{}, std::get<I>(objects_)), ...);
     }
 
     std::tuple<std::vector<Object<Shapes<T>>>...> objects_;
+    std::tuple<detail::BatchFor<T, Shapes<T>>...> batches_; // triangle kinds only
 };
 
 } // namespace isin

@@ -1,0 +1,91 @@
+// The vectorised Möller–Trumbore batch agrees with the scalar test (§10), and scenes that use it.
+#include <isin/batch.hpp>
+#include <isin/scene.hpp>
+
+#include <doctest/doctest.h>
+
+#include "approx.hpp"
+
+#include <limits>
+#include <random>
+#include <vector>
+
+TEST_CASE_TEMPLATE("§10 TriangleBatch: same nearest hit, u, v as scalar Möller–Trumbore", T, float,
+                   double) {
+    std::mt19937 rng(42);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (std::size_t n : {std::size_t(1), std::size_t(5), std::size_t(16), std::size_t(17), std::size_t(100)}) {
+        std::vector<isin::Triangle<T>> tris;
+        for (std::size_t i = 0; i < n; ++i) {
+            const isin::Vertex<T> c{T(uni(rng) * 8), T(uni(rng) * 4.5), T(20 + uni(rng) * 5)};
+            tris.push_back({c, c + T(4) * isin::Vertex<T>{T(uni(rng)), T(uni(rng)), T(uni(rng))},
+                            c + T(4) * isin::Vertex<T>{T(uni(rng)), T(uni(rng)), T(uni(rng))}});
+        }
+        tris.push_back({{1, 1, 30}, {1, 1, 30}, {2, 2, 30}}); // zero area: never hit
+        const isin::TriangleBatch<T> batch(tris);
+        REQUIRE(batch.size() == n + 1);
+        int hits = 0, agree = 0;
+        for (int r = 0; r < 2000; ++r) {
+            const isin::Ray<T> ray{{0, 0, 0}, isin::normalize(isin::Vertex<T>{T(uni(rng) * 8), T(uni(rng) * 4.5), 10})};
+            std::size_t best = 0;
+            isin::Hit<T> ref;
+            for (std::size_t i = 0; i < tris.size(); ++i) {
+                const auto h = isin::intersect_moller_trumbore(ray, tris[i]);
+                if (h.t < ref.t) ref = h, best = i;
+            }
+            const auto got = batch.nearest(ray);
+            CHECK(bool(got) == bool(ref));
+            if (!ref || !got) continue;
+            ++hits;
+            agree += got.index == best && double(got.hit.t) == approx(ref.t).epsilon(1e-5) &&
+                     double(got.hit.u) == approx(ref.u).epsilon(1e-4) && double(got.hit.v) == approx(ref.v).epsilon(1e-4);
+        }
+        CAPTURE(n);
+        CHECK(agree == hits);
+        if (n >= 16) CHECK(hits > 100);
+    }
+}
+
+TEST_CASE_TEMPLATE("TriangleBatch: t_max, each_hit, bad rays", T, float, double) {
+    const std::vector<isin::Triangle<T>> tris{{{-1, -1, 10}, {1, -1, 10}, {0, 1, 10}},
+                                              {{-1, -1, 20}, {1, -1, 20}, {0, 1, 20}}};
+    const isin::TriangleBatch<T> batch(tris);
+    const isin::Ray<T> ray{{0, 0, 0}, {0, 0, 1}};
+    CHECK(batch.nearest(ray).index == 0);
+    CHECK(batch.nearest(ray).hit.t == approx(10));
+    CHECK_FALSE(batch.nearest(ray, T(5)));
+    std::vector<std::size_t> seen;
+    batch.each_hit(ray, T(100), [&](std::size_t i, T) { seen.push_back(i); return true; });
+    CHECK(seen == std::vector<std::size_t>{0, 1});
+    seen.clear();
+    batch.each_hit(ray, T(100), [&](std::size_t i, T) { seen.push_back(i); return false; });
+    CHECK(seen.size() == 1);
+    const T nan = std::numeric_limits<T>::quiet_NaN();
+    CHECK_FALSE(batch.nearest(isin::Ray<T>{{nan, 0, 0}, {0, 0, 1}}));
+    CHECK_FALSE(batch.nearest(isin::Ray<T>{{0, 0, 0}, {0, 0, 0}}));
+    CHECK_FALSE(isin::TriangleBatch<T>{}.nearest(ray));
+}
+
+TEST_CASE_TEMPLATE("scene: batch and one-by-one triangle loops find the same hits", T, float, double) {
+    isin::Scene<T, isin::Triangle> scene;
+    const auto m = scene.add_material({});
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (int i = 0; i < 40; ++i) {
+        const isin::Vertex<T> c{T(uni(rng) * 8), T(uni(rng) * 4.5), T(20 + uni(rng) * 5)};
+        scene.add(isin::Triangle<T>{c, c + isin::Vertex<T>{T(uni(rng)), T(uni(rng)), 0},
+                                    c + isin::Vertex<T>{T(uni(rng)), T(uni(rng)), T(uni(rng))}}, m);
+    }
+    int differ = 0;
+    for (int r = 0; r < 1000; ++r) {
+        const isin::Ray<T> ray{{0, 0, 0}, isin::normalize(isin::Vertex<T>{T(uni(rng) * 8), T(uni(rng) * 4.5), 10})};
+        scene.batch_min = 1;
+        const auto a = scene.intersect(ray);
+        const T ta = scene.transmittance(ray, T(100));
+        scene.batch_min = 1000;
+        const auto b = scene.intersect(ray);
+        const T tb = scene.transmittance(ray, T(100));
+        differ += bool(a) != bool(b) || (a && a.index != b.index) || ta != tb;
+    }
+    CHECK(differ == 0);
+}
