@@ -185,3 +185,30 @@ TEST_CASE_TEMPLATE("§11 render: both culling methods drop a triangle turned awa
         CHECK(culled.b == 0);
     }
 }
+
+TEST_CASE_TEMPLATE("§10 render: an image texture on a rectangle of two right triangles lands the "
+                   "right way up",
+                   T, float, double) {
+    // A 2×2 texture: red, green on the top row; blue, white below. The rectangle faces the eye:
+    // V0 top-left (texel (0,0)), V1 top-right (texel (w,0)), V2 bottom-left (texel (0,h)).
+    isin::Image texels(2, 2);
+    texels(0, 0) = {255, 0, 0};
+    texels(1, 0) = {0, 255, 0};
+    texels(0, 1) = {0, 0, 255};
+    texels(1, 1) = {255, 255, 255};
+    isin::Scene<T, isin::TexturedTriangle> scene;
+    isin::Material<T> m;
+    m.ka = T(1), m.kd = T(0), m.ks = T(0); // ambient only: the pixel is the texel colour
+    m.texture = scene.add_texture(isin::ImageTexture<T>(texels));
+    scene.texture_filter = isin::Filter::nearest;
+    scene.add_textured_rectangle({-20, 20, 50}, {20, 20, 50}, {-20, -20, 50}, scene.add_material(m));
+    const isin::Camera<T> cam{64, 36};
+    isin::RenderOptions opt;
+    opt.progress = false;
+    const auto image = isin::render(scene, cam, opt);
+    CHECK(image(24, 10) == isin::Rgb8{255, 0, 0});     // upper left
+    CHECK(image(40, 10) == isin::Rgb8{0, 255, 0});     // upper right
+    CHECK(image(24, 26) == isin::Rgb8{0, 0, 255});     // lower left
+    CHECK(image(40, 26) == isin::Rgb8{255, 255, 255}); // lower right
+    CHECK(image(1, 1) == isin::Rgb8{0, 0, 0});         // background
+}
