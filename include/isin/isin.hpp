@@ -21,6 +21,8 @@
 /// Headers, one concept each: vec (§2), ray (§3), hit, camera (§3), triangle (§4, §10),
 /// sphere (§6), color, shading (§7, §8), offset (§9), culling (§11), texture (§10), image,
 /// scene (§5), render (§3–§11).
+#include "baldwin_weber.hpp"
+#include "batch.hpp"
 #include "camera.hpp"
 #include "color.hpp"
 #include "culling.hpp"

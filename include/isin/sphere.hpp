@@ -75,4 +75,64 @@ template <class T>
     return t > T(0) && t < std::numeric_limits<T>::infinity() ? Hit<T>::at(t) : Hit<T>::miss();
 }
 
+/// The note's geometric test exactly as written (§6), for comparison: the origin is outside when
+/// l2 > r2 (or, with `outside_margin`, when l2 > r2 + margin — the note's §8 fix, 0.001), and
+/// m2 = l2 − s². Needs a unit direction. A ray restarted on the surface may hit it again at t ≈ 0.
+/// Only the guards that keep bad input defined (zero direction or radius, NaN) are added.
+template <class T>
+[[nodiscard]] inline Hit<T> intersect_note(const Ray<T>& ray, const Sphere<T>& sp,
+                                           T outside_margin = T(0)) noexcept {
+    if (!(dot(ray.direction, ray.direction) > T(0)) || !(sp.radius > T(0))) return Hit<T>::miss();
+    const Vertex<T> l = sp.center - ray.origin;          // §6: l = C − Ro
+    const T s = dot(l, ray.direction);                   // §6: s = l·Rd
+    const T l2 = dot(l, l);                              // §6: l2 = l·l
+    const T r2 = sp.radius * sp.radius;                  // §6: r2 = r²
+    const bool outside = l2 > r2 + outside_margin;       // §8: l2 > r2 (+ 0.001)
+    if (s < T(0) && outside) return Hit<T>::miss();      // §6: behind
+    const T m2 = l2 - s * s;                             // §6: m2 = l2 − s²
+    if (!(m2 <= r2)) return Hit<T>::miss();              // §6: m2 > r2 → miss
+    const T q = std::sqrt(r2 - m2);                      // §6: q = √(r2 − m2)
+    const T t = outside ? s - q : s + q;                 // §6: outside → s − q, inside → s + q
+    return t > T(0) && t < std::numeric_limits<T>::infinity() ? Hit<T>::at(t) : Hit<T>::miss();
+}
+
+/// The textbook quadratic, for comparison: |Ro + t·Rd − C|² = r², i.e. a t² + b t + c = 0 with
+/// a = Rd·Rd, b = 2 (Ro − C)·Rd, c = |Ro − C|² − r²; nearest root t > 0.
+template <class T>
+[[nodiscard]] inline Hit<T> intersect_quadratic(const Ray<T>& ray, const Sphere<T>& sp) noexcept {
+    if (!(sp.radius > T(0))) return Hit<T>::miss();
+    const Vertex<T> oc = ray.origin - sp.center;
+    const T a = dot(ray.direction, ray.direction);
+    const T b = T(2) * dot(oc, ray.direction);
+    const T c = dot(oc, oc) - sp.radius * sp.radius;
+    const T disc = b * b - T(4) * a * c;                 // discriminant
+    if (!(disc >= T(0)) || !(a > T(0))) return Hit<T>::miss();
+    const T root = std::sqrt(disc);
+    const T t0 = (-b - root) / (T(2) * a), t1 = (-b + root) / (T(2) * a);
+    const T t = t0 > T(0) ? t0 : t1;
+    return t > T(0) && t < std::numeric_limits<T>::infinity() ? Hit<T>::at(t) : Hit<T>::miss();
+}
+
+/// The improved-precision test of Ray Tracing Gems ch. 7 (Haines, Günther & Akenine-Möller,
+/// "Precision Improvements for Ray/Sphere Intersection", 2019), for comparison: the discriminant
+/// from |f − (f·Rd/a)·Rd|² (f = Ro − C), and the root that would cancel taken as c/q.
+template <class T>
+[[nodiscard]] inline Hit<T> intersect_rtg(const Ray<T>& ray, const Sphere<T>& sp) noexcept {
+    if (!(sp.radius > T(0))) return Hit<T>::miss();
+    const Vertex<T> f = ray.origin - sp.center;
+    const T a = dot(ray.direction, ray.direction);
+    if (!(a > T(0))) return Hit<T>::miss();
+    const T b = -dot(f, ray.direction);                  // RTG: b′ = −f·d
+    const Vertex<T> g = f + (b / a) * ray.direction;     // RTG: f − (f·d/a)·d
+    const T r2 = sp.radius * sp.radius;
+    const T delta = r2 - dot(g, g);                      // RTG: Δ/(4a) = r² − |g|²
+    if (!(delta >= T(0))) return Hit<T>::miss();
+    const T c = dot(f, f) - r2;
+    const T q = b + std::copysign(std::sqrt(a * delta), b);
+    const T ta = c / q, tb = q / a;                      // RTG: t0 = c/q, t1 = q/a
+    const T t_near = ta < tb ? ta : tb, t_far = ta < tb ? tb : ta;
+    const T t = t_near > T(0) ? t_near : t_far;
+    return t > T(0) && t < std::numeric_limits<T>::infinity() ? Hit<T>::at(t) : Hit<T>::miss();
+}
+
 } // namespace isin

@@ -2,6 +2,7 @@
 /// isin — triangles: the normal of note §2 and the ray–triangle tests of §4 (area test) and §10
 /// (Möller–Trumbore).
 #include <limits>
+#include <utility>
 
 #include "hit.hpp"
 #include "ray.hpp"
@@ -75,7 +76,7 @@ template <class T>
     return !(max_abs(N) > T(8) * eps * max_abs(e1) * max_abs(e2)); // NaN → degenerate
 }
 
-/// Shared body of both area tests; `tolerance(S, R, e1, e2)` gives the allowed |S − (s1+s2+s3)|.
+/// Shared body of both area tests; `tolerance(S, R, e1, e2, ray)` gives the allowed |S − (s1+s2+s3)|.
 template <class T, class Tolerance>
 [[nodiscard]] inline Hit<T> intersect_area_with(const Ray<T>& ray, const Triangle<T>& tri,
                                                 Tolerance tolerance) noexcept {
@@ -88,7 +89,7 @@ template <class T, class Tolerance>
     if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss(); // §4: t ≤ 0 → behind
     const Vertex<T> R = ray.at(t);                        // §3: R = Ro + t·Rd
     const AreaTerms<T> a = isin::area_terms(tri, e1, e2, N, R);
-    if (!(std::fabs(a.S - (a.s1 + a.s2 + a.s3)) <= tolerance(a.S, R, e1, e2))) // §4: |S − Σs| ≤ ε
+    if (!(std::fabs(a.S - (a.s1 + a.s2 + a.s3)) <= tolerance(a.S, R, e1, e2, ray))) // §4: |S − Σs| ≤ ε
         return Hit<T>::miss();
     return Hit<T>::at(t, a.s1 / a.S, a.s2 / a.S); // u = s1/S weighs V1, v = s2/S weighs V2
 }
@@ -102,21 +103,26 @@ template <class T>
 [[nodiscard]] inline Hit<T> intersect_area(const Ray<T>& ray, const Triangle<T>& tri,
                                            T epsilon) noexcept {
     return detail::intersect_area_with(ray, tri, [epsilon](T, const Vertex<T>&, const Vertex<T>&,
-                                                           const Vertex<T>&) { return epsilon; });
+                                                           const Vertex<T>&, const Ray<T>&) { return epsilon; });
 }
 
-/// Area test of note §4 with isin's scale-relative tolerance (default). The allowed excess
-/// |S − (s1+s2+s3)| is 32ε·(S + 4·L·M): S covers the rounding of the areas themselves, L·M the
-/// rounding of R − Vi when coordinates (magnitude M) dwarf the edges (length L) — a far-away
-/// scene. ε is the machine epsilon of T, so 1e-3 and 1e5 triangles behave alike.
+/// Area test of note §4, isin's default: the same formulas, two departures for accuracy.
+/// - It works in V0's frame (ray origin Ro − V0, vertices 0, E1, E2; t, u, v are unchanged), so
+///   R and R − Vi are rounded at the triangle's scale, not at its distance from the origin.
+/// - The allowed |S − (s1+s2+s3)| is 8ε·(S + L·M), ε the machine epsilon of T: S covers the
+///   rounding of the areas, L·M that of R (L the longest edge, M the magnitude of R and of the
+///   local ray origin). So 1e-3 and 1e5 triangles, near and far from the origin, behave alike.
 template <class T>
 [[nodiscard]] inline Hit<T> intersect_area(const Ray<T>& ray, const Triangle<T>& tri) noexcept {
+    const Ray<T> local{ray.origin - tri.v0, ray.direction};
+    const Triangle<T> local_tri{{T(0), T(0), T(0)}, tri.v1 - tri.v0, tri.v2 - tri.v0};
     return detail::intersect_area_with(
-        ray, tri, [&tri](T S, const Vertex<T>& R, const Vertex<T>& e1, const Vertex<T>& e2) {
+        local, local_tri,
+        [](T S, const Vertex<T>& R, const Vertex<T>& e1, const Vertex<T>& e2, const Ray<T>& r) {
             constexpr T eps = std::numeric_limits<T>::epsilon();
             const T L = max_of(max_abs(e1), max_abs(e2));
-            const T M = max_of(max_abs(R), max_abs(tri.v0));
-            return T(32) * eps * (S + T(4) * L * M);
+            const T M = max_of(max_abs(R), max_abs(r.origin));
+            return T(8) * eps * (S + L * M);
         });
 }
 
@@ -149,6 +155,49 @@ template <class T>
     if (detail::is_degenerate(e1, e2, cross(e1, e2))) return Hit<T>::miss(); // hit path only
     const T u = U * inv_det, v = V * inv_det;
     return Hit<T>::at(t, u, v);
+}
+
+/// Watertight ray–triangle test (Woop, Benthin & Wald, "Watertight Ray/Triangle Intersection",
+/// JCGT 2(1), 2013), beyond the note: the ray is sheared so that it runs along +z, and the three
+/// 2D edge functions U, V, W of the sheared vertices decide inside/outside. Each is computed by
+/// `difference_of_products`, so its sign is exact: a ray through an edge shared by two triangles
+/// is seen on the same side of it by both, and a closed mesh has no cracks. Barycentrics u = V/det
+/// (weight of V1), v = W/det (weight of V2). Two-sided unless `cull_backfaces`.
+template <class T>
+[[nodiscard]] inline Hit<T> intersect_watertight(const Ray<T>& ray, const Triangle<T>& tri,
+                                                 bool cull_backfaces = false) noexcept {
+    const Vertex<T>& d = ray.direction;
+    // Per ray: kz is the dominant axis of the direction; kx, ky follow it cyclically, swapped
+    // when d[kz] < 0 so that the winding (and with it the sign of U, V, W) is kept (WBW §3).
+    const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
+    const int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
+    const T dz = component(d, kz);
+    if (!(dz != T(0))) return Hit<T>::miss(); // zero or NaN direction
+    if (dz < T(0)) std::swap(kx, ky);
+    const T Sx = component(d, kx) / dz, Sy = component(d, ky) / dz, Sz = T(1) / dz; // WBW: shear
+    // Per triangle: vertices relative to the origin, sheared onto the ray's frame.
+    const Vertex<T> A = tri.v0 - ray.origin, B = tri.v1 - ray.origin, C = tri.v2 - ray.origin;
+    const T Ax = component(A, kx) - Sx * component(A, kz), Ay = component(A, ky) - Sy * component(A, kz);
+    const T Bx = component(B, kx) - Sx * component(B, kz), By = component(B, ky) - Sy * component(B, kz);
+    const T Cx = component(C, kx) - Sx * component(C, kz), Cy = component(C, ky) - Sy * component(C, kz);
+    const T U = difference_of_products(Cx, By, Cy, Bx); // WBW: edge functions, exact sign
+    const T V = difference_of_products(Ax, Cy, Ay, Cx);
+    const T W = difference_of_products(Bx, Ay, By, Ax);
+    const bool any_negative = U < T(0) || V < T(0) || W < T(0);
+    const bool any_positive = U > T(0) || V > T(0) || W > T(0);
+    // Front faces (clockwise seen from the origin, §2) have U, V, W ≥ 0.
+    if (cull_backfaces ? any_negative : (any_negative && any_positive)) return Hit<T>::miss();
+    const T det = U + V + W;
+    if (!(det != T(0))) return Hit<T>::miss();
+    const T Az = Sz * component(A, kz), Bz = Sz * component(B, kz), Cz = Sz * component(C, kz);
+    const T t_scaled = U * Az + V * Bz + W * Cz;        // WBW: t·det
+    const T inv_det = T(1) / det;
+    const T t = t_scaled * inv_det;
+    if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
+    const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+    if (detail::is_degenerate(e1, e2, cross(e1, e2))) return Hit<T>::miss(); // hit path only
+    return Hit<T>::at(t, V * inv_det, W * inv_det);
 }
 
 } // namespace isin

@@ -63,6 +63,29 @@ template <class T>
     return d - T(2) * dot(d, n) * n; // §8: Rd − 2(Rd·N)N
 }
 
+/// Component k (0 = x, 1 = y, 2 = z).
+template <class T>
+[[nodiscard]] constexpr T component(const Vertex<T>& a, int k) noexcept {
+    return k == 0 ? a.x : (k == 1 ? a.y : a.z);
+}
+
+/// a·b − c·d with the sign always exact and the value within 2 ulps, whatever the compiler does
+/// with floating point short of -ffast-math (it may fuse a plain `a*b - c*d` into one FMA, which
+/// rounds the two products differently and can flip the sign of a near-zero result). float:
+/// products of floats are exact in double. double: Kahan's algorithm with explicit std::fma
+/// (hardware with -mfma or -march=native, a library call otherwise).
+template <class T>
+[[nodiscard]] inline T difference_of_products(T a, T b, T c, T d) noexcept {
+    if constexpr (sizeof(T) < sizeof(double)) {
+        return T(double(a) * double(b) - double(c) * double(d));
+    } else {
+        const T cd = c * d;
+        const T error = std::fma(-c, d, cd); // exact: cd − c·d
+        const T ab_minus_cd = std::fma(a, b, -cd);
+        return ab_minus_cd + error;
+    }
+}
+
 /// True when every component is finite (no NaN, no infinity).
 template <class T>
 [[nodiscard]] inline bool is_finite(const Vertex<T>& a) noexcept {
