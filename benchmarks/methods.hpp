@@ -48,6 +48,16 @@ template <class T> struct BaldwinWeber {
     static constexpr bool culls = false;
 };
 
+// The vectorised structure-of-arrays kernel, judged one triangle at a time (a batch of one); its
+// speed is measured on real batches (benchmarks/batch_timing.cpp).
+template <class T> struct MollerTrumboreBatch {
+    static constexpr const char* name = "moller-trumbore-batch";
+    using Data = isin::TriangleBatch<T>;
+    static Data prepare(const isin::Triangle<T>& t) { return Data(std::vector<isin::Triangle<T>>{t}); }
+    static isin::Hit<T> test(const isin::Ray<T>& r, const Data& d) { return d.nearest(r).hit; }
+    static constexpr bool culls = false;
+};
+
 template <class T> struct SphereNote {
     static constexpr const char* name = "sphere-note";
     static isin::Hit<T> test(const isin::Ray<T>& r, const isin::Sphere<T>& s) { return isin::intersect_note(r, s); }
