@@ -23,6 +23,7 @@
 /// scene (§5), render (§3–§11).
 #include "baldwin_weber.hpp"
 #include "batch.hpp"
+#include "bvh.hpp"
 #include "camera.hpp"
 #include "color.hpp"
 #include "culling.hpp"
