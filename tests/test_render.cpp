@@ -5,6 +5,7 @@
 
 #include "approx.hpp"
 #include "../examples/note_scene.hpp"
+#include "../benchmarks/workloads.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -211,4 +212,41 @@ TEST_CASE_TEMPLATE("§10 render: an image texture on a rectangle of two right tr
     CHECK(image(24, 26) == isin::Rgb8{0, 0, 255});     // lower left
     CHECK(image(40, 26) == isin::Rgb8{255, 255, 255}); // lower right
     CHECK(image(1, 1) == isin::Rgb8{0, 0, 0});         // background
+}
+
+TEST_CASE_TEMPLATE("scene: a mesh gets a BVH; hits, shadows and culling agree with the plain loop", T,
+                   float, double) {
+    const auto sphere = workloads::icosphere<T>({0, 0, 40}, 10.0, 3); // 1280 triangles, closed
+    isin::Scene<T, isin::Triangle> scene;
+    scene.add_mesh(sphere, scene.add_material({}));
+    scene.add_light({{0, 100, 0}});
+    const isin::Camera<T> cam{64, 36};
+    int differ = 0, hits = 0, shadow_differ = 0;
+    for (int y = 0; y < 36; ++y)
+        for (int x = 0; x < 64; ++x) {
+            const auto ray = cam.primary_ray(T(x), T(y));
+            scene.acceleration = isin::Acceleration::automatic; // 1280 ≥ bvh_min: the BVH
+            const auto a = scene.intersect(ray);
+            scene.acceleration = isin::Acceleration::none;
+            const auto b = scene.intersect(ray);
+            hits += bool(b);
+            differ += bool(a) != bool(b) || (a && std::fabs(double(a.hit.t) - double(b.hit.t)) > 1e-4 * double(b.hit.t));
+            if (!b) continue;
+            const auto p = isin::offset_origin(ray.at(b.hit.t), scene.surface(ray, b).normal);
+            const isin::Ray<T> shadow{p, scene.lights[0].position - p};
+            scene.acceleration = isin::Acceleration::automatic;
+            const T ta = scene.transmittance(shadow, T(1));
+            scene.acceleration = isin::Acceleration::none;
+            shadow_differ += ta != scene.transmittance(shadow, T(1));
+        }
+    scene.acceleration = isin::Acceleration::automatic;
+    CHECK(hits > 300);
+    CHECK(differ == 0);
+    CHECK(shadow_differ == 0);
+    // Culling through the BVH: a closed mesh seen from outside looks the same with and without.
+    isin::RenderOptions opt;
+    opt.progress = false;
+    const auto plain = isin::render(scene, cam, opt);
+    opt.culling = isin::Culling::dot_product;
+    CHECK(isin::render(scene, cam, opt).pixels() == plain.pixels());
 }

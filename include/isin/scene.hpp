@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "batch.hpp"
+#include "bvh.hpp"
 #include "color.hpp"
 #include "hit.hpp"
 #include "ray.hpp"
@@ -99,9 +101,25 @@ template <class T> struct is_triangle_kind<TexturedTriangle<T>> : std::true_type
 
 namespace detail {
 struct NoBatch {};
+// What a scene keeps to speed up one triangle kind: the vectorised batch (always, it is cheap)
+// and a BVH (built by commit() when the kind is large enough).
+template <class T>
+struct TriangleAcceleration {
+    TriangleBatch<T> batch;
+    std::shared_ptr<const Bvh<T>> bvh; // immutable once built: copies of the scene share it
+    bool opaque = true;                // every triangle of the kind has transparency 0
+};
 template <class T, class Shape>
-using BatchFor = std::conditional_t<is_triangle_kind<Shape>::value, TriangleBatch<T>, NoBatch>;
+using BatchFor = std::conditional_t<is_triangle_kind<Shape>::value, TriangleAcceleration<T>, NoBatch>;
 } // namespace detail
+
+/// How a scene finds hits among the triangles of one kind ("model no more than a scene needs").
+enum class Acceleration {
+    automatic, ///< by size: one by one, then TriangleBatch from batch_min, then Bvh from bvh_min
+    none,      ///< one triangle after another
+    batch,     ///< TriangleBatch: Möller–Trumbore over structure-of-arrays, vectorised
+    bvh        ///< Bvh: 8-wide bounding volume hierarchy, watertight triangle test
+};
 
 /// Normalised texture coordinates of a hit, or none: only textured triangles carry them (§10).
 template <class T, class Shape>
@@ -148,6 +166,12 @@ public:
     /// hit of one ray: the batch wins from 4 triangles with -march=native (AVX-512) and from 4–8
     /// with plain -O3 (SSE2); on the note's scene (3 + 2 triangles) the scalar loop wins.
     std::size_t batch_min = 8;
+    /// Triangle kinds with at least this many triangles get a Bvh when the scene is committed
+    /// (add_mesh commits by itself). Measured crossover: see benchmarks/scaling and the README.
+    std::size_t bvh_min = 64;
+    /// Overrides the choice by size for every triangle kind. Bvh and batch apply to
+    /// Möller–Trumbore scenes; the area test (triangle_method) always goes one by one.
+    Acceleration acceleration = Acceleration::automatic;
 
     /// Adds a material; returns its index.
     std::uint32_t add_material(const Material<T>& m) {
@@ -172,7 +196,36 @@ public:
                                     " materials)");
         constexpr std::size_t kind = index_of<Shape>();
         std::get<kind>(objects_).push_back({shape, material});
-        if constexpr (is_triangle_kind<Shape>::value) std::get<kind>(batches_).push_back(*triangle_of(shape));
+        if constexpr (is_triangle_kind<Shape>::value) {
+            auto& accel = std::get<kind>(batches_);
+            accel.batch.push_back(*triangle_of(shape));
+            accel.bvh.reset(); // stale: commit() builds it again
+        }
+    }
+
+    /// Adds a whole mesh (e.g. from load_mesh) with one material, then commits the scene so a
+    /// large mesh gets its Bvh.
+    void add_mesh(const std::vector<Triangle<T>>& triangles, std::uint32_t material) {
+        for (const Triangle<T>& tri : triangles) add(tri, material);
+        commit();
+    }
+
+    /// Builds a Bvh for every triangle kind that uses one (by acceleration and bvh_min). Call it
+    /// after adding triangles one by one; until then the scene uses its other loops.
+    void commit(const BvhOptions& options = {}) {
+        for_each_kind([&](auto kind, const auto& vec) {
+            if constexpr (is_triangle_kind<typename std::decay_t<decltype(vec)>::value_type::shape_type>::value) {
+                auto& accel = std::get<kind>(batches_);
+                accel.bvh.reset();
+                accel.opaque = true;
+                for (const auto& obj : vec) accel.opaque = accel.opaque && !(materials[obj.material].transparency > T(0));
+                if (!uses(Acceleration::bvh, vec.size())) return;
+                std::vector<Triangle<T>> tris;
+                tris.reserve(vec.size());
+                for (const auto& obj : vec) tris.push_back(*triangle_of(obj.shape));
+                accel.bvh = std::make_shared<const Bvh<T>>(tris, options);
+            }
+        });
     }
 
     /// Adds a textured rectangle as the note's two right triangles (§10): corner `v0` (the right
@@ -207,8 +260,13 @@ public:
         for_each_kind([&](auto kind, const auto& vec) {
             const std::uint8_t* mask = skip && !(*skip)[kind].empty() ? (*skip)[kind].data() : nullptr;
             if constexpr (is_triangle_kind<typename std::decay_t<decltype(vec)>::value_type::shape_type>::value) {
-                if (!mask && triangle_method == TriangleMethod::moller_trumbore && vec.size() >= batch_min) {
-                    if (const auto h = std::get<kind>(batches_).nearest(ray, best.hit.t)) best = {h.hit, kind, h.index};
+                const auto& accel = std::get<kind>(batches_);
+                if (accel.bvh && uses(Acceleration::bvh, vec.size())) {
+                    nearest_in_bvh(*accel.bvh, ray, mask, kind, best);
+                    return;
+                }
+                if (!mask && uses(Acceleration::batch, vec.size())) {
+                    if (const auto h = accel.batch.nearest(ray, best.hit.t)) best = {h.hit, kind, h.index};
                     return;
                 }
             }
@@ -229,8 +287,13 @@ public:
         for_each_kind([&](auto kind, const auto& vec) {
             if (!(through > T(0))) return;
             if constexpr (is_triangle_kind<typename std::decay_t<decltype(vec)>::value_type::shape_type>::value) {
-                if (triangle_method == TriangleMethod::moller_trumbore && vec.size() >= batch_min) {
-                    std::get<kind>(batches_).each_hit(ray, t_max, [&](std::size_t i, T) {
+                const auto& accel = std::get<kind>(batches_);
+                if (accel.bvh && accel.opaque && uses(Acceleration::bvh, vec.size())) {
+                    if (accel.bvh->occluded(ray, t_max)) through = T(0); // §9: any opaque hit shadows
+                    return;
+                }
+                if (uses(Acceleration::batch, vec.size())) {
+                    accel.batch.each_hit(ray, t_max, [&](std::size_t i, T) {
                         through *= materials[vec[i].material].transparency;
                         return through > T(0);
                     });
@@ -266,6 +329,30 @@ public:
     }
 
 private:
+    // Whether a triangle kind of n triangles is tested with acceleration `a`.
+    [[nodiscard]] bool uses(Acceleration a, std::size_t n) const noexcept {
+        if (triangle_method != TriangleMethod::moller_trumbore) return false;
+        if (acceleration != Acceleration::automatic) return acceleration == a;
+        return a == Acceleration::bvh ? n >= bvh_min : (n >= batch_min && n < bvh_min);
+    }
+
+    // Nearest hit in a kind's Bvh. With a culling mask, a culled nearest hit is stepped over
+    // (the ray restarts just past it) until an unculled one or a miss, at most 16 times.
+    void nearest_in_bvh(const Bvh<T>& bvh, const Ray<T>& ray, const std::uint8_t* mask, std::size_t kind,
+                        SceneHit<T>& best) const noexcept {
+        T t0 = T(0);
+        for (int step = 0; step < 16; ++step) {
+            const Ray<T> part{t0 > T(0) ? ray.at(t0) : ray.origin, ray.direction};
+            const BvhHit<T> h = bvh.intersect(part, best.hit.t - t0);
+            if (!h) return;
+            if (!mask || !mask[h.primitive]) {
+                best = {Hit<T>{t0 + h.t, h.u, h.v}, kind, h.primitive};
+                return;
+            }
+            t0 += h.t * (T(1) + T(64) * std::numeric_limits<T>::epsilon()) + std::numeric_limits<T>::min();
+        }
+    }
+
     template <class Shape, std::size_t I = 0>
     static constexpr std::size_t index_of() {
         static_assert(I < kinds, "isin::Scene::add: this scene does not hold that primitive kind");
