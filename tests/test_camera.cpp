@@ -100,3 +100,57 @@ TEST_CASE_TEMPLATE("§3 look_at turns the camera towards a target", T, float, do
     const auto same = isin::Camera<T>::look_at(800, 450, {1, 2, 3}, {1, 2, 3});
     CHECK(same.forward() == isin::Vertex<T>{0, 0, 1});
 }
+
+TEST_CASE_TEMPLATE("§12 walking: W then S returns to the start", T, float, double) {
+    isin::Camera<T> cam{160, 90, {1, 2, 3}, T(0.4), T(0.2)};
+    const auto start = cam.position();
+    cam.move_forward(T(2.5));
+    CHECK(isin::length(cam.position() - start) == approx(2.5));
+    CHECK(cam.position().y == approx(2)); // walking stays level, even when looking up
+    cam.move_backward(T(2.5));
+    CHECK(cam.position().x == approx(start.x));
+    CHECK(cam.position().y == approx(start.y));
+    CHECK(cam.position().z == approx(start.z));
+    cam.move_right(T(1));
+    cam.move_left(T(1));
+    CHECK(isin::length(cam.position() - start) == approx(0).epsilon(1e-5));
+}
+
+TEST_CASE_TEMPLATE("§12 walking: D moves along +X when facing +Z, A along −X", T, float, double) {
+    isin::Camera<T> cam{160, 90};
+    cam.move_right(T(1));
+    CHECK(cam.position() == isin::Vertex<T>{1, 0, 0});
+    cam.move_left(T(3));
+    CHECK(cam.position() == isin::Vertex<T>{-2, 0, 0});
+    cam.move_forward(T(5));
+    CHECK(cam.position() == isin::Vertex<T>{-2, 0, 5});
+}
+
+TEST_CASE_TEMPLATE("§12 turning: yaw by 90° turns +Z into +X; pitch is limited to ±89°", T, float,
+                   double) {
+    isin::Camera<T> cam{160, 90};
+    cam.turn(T(1.5707963267948966));
+    CHECK(cam.forward().x == approx(1));
+    CHECK(cam.forward().z == approx(0).epsilon(1e-6));
+    cam.move_forward(T(2));
+    CHECK(cam.position().x == approx(2));
+    cam.turn(T(0), T(3));
+    CHECK(cam.pitch() == approx(1.5533430342749532));
+    CHECK(cam.up().y > T(0));
+    cam.turn(T(0), T(-6));
+    CHECK(cam.pitch() == approx(-1.5533430342749532));
+}
+
+TEST_CASE_TEMPLATE("§12 the note's pixel mapping is unchanged at rest and after a round trip", T,
+                   float, double) {
+    isin::Camera<T> cam{800, 450};
+    CHECK(cam.image_point(T(0), T(0)) == isin::Vertex<T>{-8, T(4.5), 10});
+    cam.turn(T(0.3));
+    cam.move_forward(T(4));
+    cam.move_backward(T(4));
+    cam.turn(T(-0.3));
+    const auto gd = cam.image_point(T(799), T(449));
+    CHECK(gd.x == approx(8));
+    CHECK(gd.y == approx(-4.5));
+    CHECK(gd.z == approx(10));
+}

@@ -54,6 +54,22 @@ public:
         up_ = cross(forward_, right_); // left-handed: right × up = forward
     }
 
+    /// Walking (note §12, keys W/S and A/D): a step along the heading in the horizontal plane
+    /// (yaw only, so looking up or down does not make W fly), or sideways along the camera's
+    /// right vector. Negative steps go the other way; non-finite steps are ignored.
+    void move_forward(T step) noexcept { set_pose(position_ + step * heading(), yaw_, pitch_); }
+    void move_backward(T step) noexcept { move_forward(-step); }
+    void move_right(T step) noexcept { set_pose(position_ + step * right_, yaw_, pitch_); }
+    void move_left(T step) noexcept { move_right(-step); }
+    /// Turns by `yaw` (radians, positive turns right: +Z towards +X) and `pitch` (positive looks
+    /// up); pitch stays within ±89° so that the view never flips over.
+    void turn(T yaw, T pitch = T(0)) noexcept {
+        const T limit = T(1.5533430342749532); // 89°
+        set_pose(position_, yaw_ + yaw, std::clamp(pitch_ + pitch, -limit, limit));
+    }
+    /// The horizontal direction the camera faces: (sin yaw, 0, cos yaw).
+    [[nodiscard]] Vertex<T> heading() const noexcept { return {std::sin(yaw_), T(0), std::cos(yaw_)}; }
+
     [[nodiscard]] int width() const noexcept { return width_; }
     [[nodiscard]] int height() const noexcept { return height_; }
     [[nodiscard]] const Vertex<T>& position() const noexcept { return position_; }
