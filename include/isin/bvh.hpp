@@ -166,7 +166,9 @@ private:
         leaf_size_ = std::clamp(options.leaf_size, 1, 8);
         const int hw = int(std::thread::hardware_concurrency());
         std::atomic<int> threads_left{std::max(1, options.threads > 0 ? options.threads : hw) - 1};
-        auto root = build_binary(prims, 0, static_cast<std::uint32_t>(prims.size()), 0, threads_left);
+        detail::Box<T> box, centroids;
+        for (const Prim& p : prims) box.grow(p.box), centroids.grow(p.centroid);
+        auto root = build_binary(prims, 0, static_cast<std::uint32_t>(prims.size()), box, centroids, 0, threads_left);
         nodes_.reserve(prims.size() / 4 + 1);
         blocks_.reserve(prims.size() / 2 + 1);
         if (root->leaf()) { // a single leaf: a root node with one child
@@ -179,75 +181,99 @@ private:
         triangles_ = nullptr;
     }
 
-    // Binary SAH build of prims[first, first + count). Past depth 40 it splits at the median of
-    // the widest axis, which bounds the depth (and so the traversal stack) for any input.
+    // Binary SAH build of prims[first, first + count), whose box and centroid bounds the caller
+    // knows. One pass bins the centroids on all three axes (16 bins); the sweep gives the
+    // children's boxes and centroid bounds, so no level re-reads its primitives for them. Past
+    // depth 40 it splits at the median of the widest axis, which bounds the depth (and so the
+    // traversal stack) for any input.
     std::unique_ptr<detail::BinaryNode<T>> build_binary(std::vector<Prim>& prims, std::uint32_t first,
-                                                        std::uint32_t count, int depth,
+                                                        std::uint32_t count, const detail::Box<T>& box,
+                                                        const detail::Box<T>& centroids, int depth,
                                                         std::atomic<int>& threads_left) {
         auto node = std::make_unique<detail::BinaryNode<T>>();
-        detail::Box<T> centroids;
-        for (std::uint32_t i = first; i < first + count; ++i) node->box.grow(prims[i].box), centroids.grow(prims[i].centroid);
-        node->first = first, node->count = count;
-        if (count <= std::uint32_t(leaf_size_) && count <= 2) return node;
+        node->box = box, node->first = first, node->count = count;
+        if (count <= 2 && count <= std::uint32_t(leaf_size_)) return node;
 
-        // Binned SAH (16 bins on the centroids, every axis): cost = Σ area · count.
         constexpr int bins = 16;
+        struct Bin {
+            detail::Box<T> box, centroids;
+            std::uint32_t n = 0;
+        };
+        Bin bin[3][bins];
+        const Vertex<T> extent = centroids.hi - centroids.lo;
+        T scale[3], lo[3];
+        for (int a = 0; a < 3; ++a) {
+            const T e = component(extent, a);
+            scale[a] = e > T(0) ? T(bins) * (T(1) - std::numeric_limits<T>::epsilon()) / e : T(0);
+            lo[a] = component(centroids.lo, a);
+        }
+        const bool binned = depth < 40 && (extent.x > T(0) || extent.y > T(0) || extent.z > T(0));
+        if (binned)
+            for (std::uint32_t i = first; i < first + count; ++i) {
+                const Prim& p = prims[i];
+                for (int a = 0; a < 3; ++a) {
+                    Bin& b = bin[a][int((component(p.centroid, a) - lo[a]) * scale[a])];
+                    b.box.grow(p.box), b.centroids.grow(p.centroid), ++b.n;
+                }
+            }
+        // Sweep: cost = Σ area · count over the two sides.
         T best_cost = std::numeric_limits<T>::infinity();
         int best_axis = -1, best_split = 0;
-        const Vertex<T> extent = centroids.hi - centroids.lo;
-        for (int axis = 0; axis < 3 && depth < 40; ++axis) {
-            const T ext = component(extent, axis);
-            if (!(ext > T(0))) continue;
-            const T scale = T(bins) / ext, lo = component(centroids.lo, axis);
-            detail::Box<T> box[bins];
-            std::uint32_t n[bins] = {};
-            for (std::uint32_t i = first; i < first + count; ++i) {
-                const int b = std::min(bins - 1, int((component(prims[i].centroid, axis) - lo) * scale));
-                box[b].grow(prims[i].box), ++n[b];
-            }
+        for (int a = 0; a < 3 && binned; ++a) {
+            if (!(scale[a] > T(0))) continue;
             T right_area[bins];
             std::uint32_t right_n[bins];
             detail::Box<T> acc;
             std::uint32_t acc_n = 0;
-            for (int b = bins - 1; b > 0; --b) acc.grow(box[b]), acc_n += n[b], right_area[b] = acc.half_area(), right_n[b] = acc_n;
+            for (int b = bins - 1; b > 0; --b)
+                acc.grow(bin[a][b].box), acc_n += bin[a][b].n, right_area[b] = acc.half_area(), right_n[b] = acc_n;
             acc = {}, acc_n = 0;
             for (int b = 0; b < bins - 1; ++b) {
-                acc.grow(box[b]), acc_n += n[b];
+                acc.grow(bin[a][b].box), acc_n += bin[a][b].n;
                 if (acc_n == 0 || right_n[b + 1] == 0) continue;
                 const T cost = acc.half_area() * T(acc_n) + right_area[b + 1] * T(right_n[b + 1]);
-                if (cost < best_cost) best_cost = cost, best_axis = axis, best_split = b;
+                if (cost < best_cost) best_cost = cost, best_axis = a, best_split = b;
             }
         }
-        const T leaf_cost = node->box.half_area() * T(count);
-        if (count <= std::uint32_t(leaf_size_) && !(best_cost < leaf_cost - T(1) * node->box.half_area())) return node;
+        const T leaf_cost = box.half_area() * T(count);
+        if (count <= std::uint32_t(leaf_size_) && !(best_cost < leaf_cost - box.half_area())) return node;
 
         std::uint32_t mid;
+        detail::Box<T> left_box, right_box, left_centroids, right_centroids;
         if (best_axis >= 0) {
-            const T scale = T(bins) / component(extent, best_axis), lo = component(centroids.lo, best_axis);
+            const int a = best_axis;
+            for (int b = 0; b < bins; ++b) {
+                detail::Box<T>& side = b <= best_split ? left_box : right_box;
+                detail::Box<T>& side_c = b <= best_split ? left_centroids : right_centroids;
+                if (bin[a][b].n) side.grow(bin[a][b].box), side_c.grow(bin[a][b].centroids);
+            }
             const auto middle = std::partition(prims.begin() + first, prims.begin() + first + count, [&](const Prim& p) {
-                return std::min(bins - 1, int((component(p.centroid, best_axis) - lo) * scale)) <= best_split;
+                return int((component(p.centroid, a) - lo[a]) * scale[a]) <= best_split;
             });
             mid = static_cast<std::uint32_t>(middle - prims.begin());
         } else { // deep, or all centroids coincide: split at the median of the widest axis
-            const int axis = extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2) : (extent.y >= extent.z ? 1 : 2);
+            const int a = extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2) : (extent.y >= extent.z ? 1 : 2);
             mid = first + count / 2;
             std::nth_element(prims.begin() + first, prims.begin() + mid, prims.begin() + first + count,
-                             [axis](const Prim& a, const Prim& b) { return component(a.centroid, axis) < component(b.centroid, axis); });
+                             [a](const Prim& p, const Prim& q) { return component(p.centroid, a) < component(q.centroid, a); });
+            for (std::uint32_t i = first; i < mid; ++i) left_box.grow(prims[i].box), left_centroids.grow(prims[i].centroid);
+            for (std::uint32_t i = mid; i < first + count; ++i) right_box.grow(prims[i].box), right_centroids.grow(prims[i].centroid);
         }
-        if (mid == first || mid == first + count) mid = first + count / 2;
 
         const std::uint32_t left_count = mid - first, right_count = count - left_count;
         if (count > 65536 && threads_left.fetch_sub(1) > 0) { // a large subtree on its own thread
             std::unique_ptr<detail::BinaryNode<T>> left;
-            std::thread worker([&] { left = build_binary(prims, first, left_count, depth + 1, threads_left); });
-            node->right = build_binary(prims, mid, right_count, depth + 1, threads_left);
+            std::thread worker([&] {
+                left = build_binary(prims, first, left_count, left_box, left_centroids, depth + 1, threads_left);
+            });
+            node->right = build_binary(prims, mid, right_count, right_box, right_centroids, depth + 1, threads_left);
             worker.join();
             node->left = std::move(left);
             threads_left.fetch_add(1);
         } else {
             threads_left.fetch_add(count > 65536 ? 1 : 0); // undo the failed claim
-            node->left = build_binary(prims, first, left_count, depth + 1, threads_left);
-            node->right = build_binary(prims, mid, right_count, depth + 1, threads_left);
+            node->left = build_binary(prims, first, left_count, left_box, left_centroids, depth + 1, threads_left);
+            node->right = build_binary(prims, mid, right_count, right_box, right_centroids, depth + 1, threads_left);
         }
         return node;
     }
