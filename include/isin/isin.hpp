@@ -20,7 +20,7 @@
 ///
 /// Headers, one concept each: vec (§2), ray (§3), hit, camera (§3), triangle (§4, §10),
 /// sphere (§6), color, shading (§7, §8), offset (§9), culling (§11), texture (§10), image,
-/// scene (§5), render (§3–§11).
+/// mesh (OBJ/PLY files), scene (§5), render (§3–§11).
 #include "baldwin_weber.hpp"
 #include "batch.hpp"
 #include "bvh.hpp"
@@ -29,6 +29,7 @@
 #include "culling.hpp"
 #include "hit.hpp"
 #include "image.hpp"
+#include "mesh.hpp"
 #include "offset.hpp"
 #include "ray.hpp"
 #include "render.hpp"

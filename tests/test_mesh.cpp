@@ -1,0 +1,599 @@
+// Mesh files: OBJ (through tinyobjloader) and PLY (ASCII, binary little-endian) to triangles,
+// fan triangulation and winding, and the errors for broken or hostile files.
+#include <isin/mesh.hpp>
+
+#include <doctest/doctest.h>
+
+#include "approx.hpp"
+
+#include <chrono>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A fresh, empty directory under the system temp directory, removed with its contents.
+struct TempDir {
+    fs::path path;
+    TempDir() {
+        static int n = 0;
+        std::random_device random;
+        const auto stamp = std::to_string(random()) + "-" +
+                           std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()) + "-" +
+                           std::to_string(n++);
+        path = fs::temp_directory_path() / ("isin-test-mesh-" + stamp);
+        fs::remove_all(path);
+        fs::create_directories(path);
+    }
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(path, ec);
+    }
+    /// Writes `content` to the file `name` in this directory; returns its path.
+    std::string put(const std::string& name, const std::string& content) const {
+        const std::string file = (path / name).string();
+        std::ofstream out(file, std::ios::binary);
+        out << content;
+        return file;
+    }
+};
+
+/// The what() of the E thrown by f, or "" (and a failed check) if none was thrown.
+template <class E = isin::MeshError, class F>
+std::string thrown(F f) {
+    try {
+        f();
+    } catch (const E& e) {
+        return e.what();
+    } catch (const std::exception& e) {
+        FAIL("threw the wrong exception type: " << e.what());
+        return "";
+    }
+    FAIL("did not throw");
+    return "";
+}
+
+doctest::String str(const std::string& s) { return s.c_str(); }
+
+/// Bytes of a binary PLY body, values in the host's order (checked to be little-endian).
+struct Bytes {
+    std::string data;
+    template <class V>
+    Bytes& put(V v) {
+        char b[sizeof v];
+        std::memcpy(b, &v, sizeof v);
+        data.append(b, sizeof v);
+        return *this;
+    }
+};
+
+bool host_is_little_endian() {
+    const std::uint16_t one = 1;
+    unsigned char first = 0;
+    std::memcpy(&first, &one, 1);
+    return first == 1;
+}
+
+template <class T>
+isin::Vertex<T> V(double x, double y, double z) {
+    return {static_cast<T>(x), static_cast<T>(y), static_cast<T>(z)};
+}
+
+template <class T>
+void check_triangle(const isin::Triangle<T>& t, const isin::Vertex<T>& a, const isin::Vertex<T>& b,
+                    const isin::Vertex<T>& c) {
+    CHECK(t.v0 == a);
+    CHECK(t.v1 == b);
+    CHECK(t.v2 == c);
+}
+
+// A quad, a triangle and a pentagon, all counter-clockwise seen from +z, then the triangle
+// again reversed. Every coordinate is exact in binary.
+const char* const polygons_obj = "# quad, triangle, pentagon\n"
+                                 "v 0 0 0\n"
+                                 "v 2 0 0\n"
+                                 "v 2 2 0\n"
+                                 "v 0 2 0\n"
+                                 "v 5 0 1.5\n"
+                                 "v 6 0 1.5\n"
+                                 "v 5 1 1.5\n"
+                                 "v 10 0 -0.5\n"
+                                 "v 11 0 -0.5\n"
+                                 "v 11.5 1 -0.5\n"
+                                 "v 10.5 2 -0.5\n"
+                                 "v 9.5 1 -0.5\n"
+                                 "f 1 2 3 4\n"
+                                 "f 5 6 7\n"
+                                 "f 8 9 10 11 12\n"
+                                 "f 7 6 5\n";
+
+// Four vertices with normals, colours; a quad and a triangle; an edge element to skip.
+const char* const ascii_ply = "ply\n"
+                              "format ascii 1.0\n"
+                              "comment written by test_mesh\n"
+                              "obj_info nothing\n"
+                              "element vertex 5\n"
+                              "property float x\n"
+                              "property float nx\n"
+                              "property float y\n"
+                              "property float z\n"
+                              "property float ny\n"
+                              "property float nz\n"
+                              "property uchar red\n"
+                              "property uchar green\n"
+                              "property uchar blue\n"
+                              "element face 2\n"
+                              "property list uchar int vertex_indices\n"
+                              "element edge 1\n"
+                              "property int vertex1\n"
+                              "property int vertex2\n"
+                              "end_header\n"
+                              "0 0 0 0 0 1 255 0 0\n"
+                              "2 0 0 0 0 1 0 255 0\n"
+                              "2 0 2 0 0 1 0 0 255\n"
+                              "0 0 2 0 0 1 10 20 30\n"
+                              "1 0 1 3.25 0 1 1 2 3\n"
+                              "4 0 1 2 3\n"
+                              "3 0 4 1\n"
+                              "0 1\n";
+
+/// Header lines joined with '\n', ending with end_header.
+std::string header(std::initializer_list<const char*> lines) {
+    std::string h;
+    for (const char* l : lines) h += std::string(l) + "\n";
+    return h + "end_header\n";
+}
+
+} // namespace
+
+#if ISIN_HAVE_TINYOBJLOADER
+TEST_CASE_TEMPLATE("OBJ: quad, triangle, pentagon become fans (v0, vi, vi+1) with exact coordinates", T,
+                   float, double) {
+    TempDir dir;
+    const auto tris = isin::load_obj<T>(dir.put("polygons.obj", polygons_obj));
+    REQUIRE(tris.size() == 2 + 1 + 3 + 1);
+    check_triangle(tris[0], V<T>(0, 0, 0), V<T>(2, 0, 0), V<T>(2, 2, 0));
+    check_triangle(tris[1], V<T>(0, 0, 0), V<T>(2, 2, 0), V<T>(0, 2, 0));
+    check_triangle(tris[2], V<T>(5, 0, 1.5), V<T>(6, 0, 1.5), V<T>(5, 1, 1.5));
+    check_triangle(tris[3], V<T>(10, 0, -0.5), V<T>(11, 0, -0.5), V<T>(11.5, 1, -0.5));
+    check_triangle(tris[4], V<T>(10, 0, -0.5), V<T>(11.5, 1, -0.5), V<T>(10.5, 2, -0.5));
+    check_triangle(tris[5], V<T>(10, 0, -0.5), V<T>(10.5, 2, -0.5), V<T>(9.5, 1, -0.5));
+    check_triangle(tris[6], V<T>(5, 1, 1.5), V<T>(6, 0, 1.5), V<T>(5, 0, 1.5));
+    // Winding kept: every piece of a counter-clockwise polygon has its normal along +z, the
+    // reversed triangle along −z.
+    for (std::size_t i = 0; i < 6; ++i) {
+        const auto N = isin::normal(tris[i]);
+        CHECK(N.x == T(0));
+        CHECK(N.y == T(0));
+        CHECK(N.z > T(0));
+    }
+    CHECK(isin::normal(tris[6]).z < T(0));
+}
+
+TEST_CASE_TEMPLATE("OBJ: negative indices, v/vt/vn forms, groups, usemtl and a missing .mtl", T, float, double) {
+    TempDir dir;
+    const std::string obj = "mtllib missing.mtl\n"
+                            "v 0 0 0\n"
+                            "v 1 0 0\n"
+                            "v 0 1 0\n"
+                            "vt 0 0\n"
+                            "vt 1 0\n"
+                            "vt 0 1\n"
+                            "vn 0 0 1\n"
+                            "f -3/-3/-1 -2/-2/-1 -1/-1/-1\n"
+                            "g second\n"
+                            "usemtl nothing\n"
+                            "v 0 0 1\n"
+                            "v 1 0 1 1.0\n"        // with w
+                            "v 0 1 1 0.5 0.5 0.5\n" // with a colour
+                            "f 4//1 5//1 6//1\n"
+                            "o object\n"
+                            "s 1\n"
+                            "f 4/1 5/2 6/3\n"
+                            "f -3/1/1 5/2/1 -1/3/1\n"
+                            "\tf  1  2\t3  \n";
+    const auto tris = isin::load_obj<T>(dir.put("forms.obj", obj));
+    REQUIRE(tris.size() == 5);
+    check_triangle(tris[0], V<T>(0, 0, 0), V<T>(1, 0, 0), V<T>(0, 1, 0));
+    for (std::size_t i = 1; i < 4; ++i) check_triangle(tris[i], V<T>(0, 0, 1), V<T>(1, 0, 1), V<T>(0, 1, 1));
+    check_triangle(tris[4], V<T>(0, 0, 0), V<T>(1, 0, 0), V<T>(0, 1, 0));
+}
+
+TEST_CASE("OBJ: a face may name vertices defined later in the file; CRLF line ends work") {
+    TempDir dir;
+    const auto tris = isin::load_obj<double>(dir.put("forward.obj", "f 1 2 3\r\nv 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\n"));
+    REQUIRE(tris.size() == 1);
+    check_triangle(tris[0], V<double>(0, 0, 0), V<double>(1, 0, 0), V<double>(0, 1, 0));
+}
+
+#else
+TEST_CASE("OBJ without tinyobjloader: load_obj and load_mesh throw runtime_error saying what to install") {
+    TempDir dir;
+    const std::string obj = dir.put("a.obj", polygons_obj);
+    CHECK_THROWS_WITH_AS((void)isin::load_obj<float>(obj), doctest::Contains("libtinyobjloader-dev"),
+                         std::runtime_error);
+    CHECK_THROWS_WITH_AS((void)isin::load_mesh<double>(obj), doctest::Contains(str(obj)), std::runtime_error);
+}
+#endif
+
+TEST_CASE("OBJ and PLY without faces give an empty mesh, not an error") {
+    TempDir dir;
+#if ISIN_HAVE_TINYOBJLOADER
+    CHECK(isin::load_obj<float>(dir.put("empty.obj", "")).empty());
+    CHECK(isin::load_obj<float>(dir.put("points.obj", "# only vertices\nv 0 0 0\nv 1 1 1\n")).empty());
+#endif
+    CHECK(isin::load_ply<float>(dir.put("points.ply", header({"ply", "format ascii 1.0", "element vertex 1",
+                                                             "property float x", "property float y",
+                                                             "property float z"}) +
+                                                         "1 2 3\n"))
+              .empty());
+    CHECK(isin::load_ply<float>(dir.put("nothing.ply", header({"ply", "format binary_little_endian 1.0"}))).empty());
+}
+
+TEST_CASE_TEMPLATE("PLY ascii: extra vertex properties and elements are skipped, quads become fans", T, float,
+                   double) {
+    TempDir dir;
+    const auto tris = isin::load_ply<T>(dir.put("mesh.ply", ascii_ply));
+    REQUIRE(tris.size() == 3);
+    check_triangle(tris[0], V<T>(0, 0, 0), V<T>(2, 0, 0), V<T>(2, 2, 0));
+    check_triangle(tris[1], V<T>(0, 0, 0), V<T>(2, 2, 0), V<T>(0, 2, 0));
+    check_triangle(tris[2], V<T>(0, 0, 0), V<T>(1, 1, 3.25), V<T>(2, 0, 0));
+    CHECK(isin::normal(tris[0]).z > T(0));
+    CHECK(isin::normal(tris[1]).z > T(0));
+}
+
+TEST_CASE_TEMPLATE("PLY binary little-endian: float/int32/uint8 data, lists skipped byte-exactly", T, float,
+                   double) {
+    if (!host_is_little_endian()) {
+        MESSAGE("skipped: the test writes the binary body in the host's byte order");
+        return;
+    }
+    TempDir dir;
+    std::string file = header({"ply", "format binary_little_endian 1.0", "comment a camera first, to skip",
+                               "element camera 1", "property double fov", "property list uchar short ids",
+                               "element vertex 5", "property float x", "property float y", "property float z",
+                               "property float nx", "property float ny", "property float nz",
+                               "property uchar red", "property uchar green", "property uchar blue",
+                               "element material 2", "property list int float values", "property ushort id",
+                               "element face 2", "property uchar flags", "property list uchar int vertex_indices",
+                               "property int8 tag"});
+    Bytes b;
+    b.put(0.75).put(std::uint8_t{3}).put(std::int16_t{-1}).put(std::int16_t{7}).put(std::int16_t{9});
+    const float xyz[5][3] = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}, {1, 1, 3.25f}};
+    for (const auto& p : xyz) {
+        b.put(p[0]).put(p[1]).put(p[2]).put(0.0f).put(0.0f).put(1.0f);
+        b.put(std::uint8_t{255}).put(std::uint8_t{128}).put(std::uint8_t{0});
+    }
+    b.put(std::int32_t{2}).put(0.5f).put(0.25f).put(std::uint16_t{1});
+    b.put(std::int32_t{0}).put(std::uint16_t{2});
+    b.put(std::uint8_t{0}).put(std::uint8_t{4});
+    for (std::int32_t i : {0, 1, 2, 3}) b.put(i);
+    b.put(std::int8_t{-5});
+    b.put(std::uint8_t{1}).put(std::uint8_t{3});
+    for (std::int32_t i : {0, 4, 1}) b.put(i);
+    b.put(std::int8_t{6});
+    file += b.data;
+
+    const auto tris = isin::load_ply<T>(dir.put("mesh.ply", file));
+    REQUIRE(tris.size() == 3);
+    check_triangle(tris[0], V<T>(0, 0, 0), V<T>(2, 0, 0), V<T>(2, 2, 0));
+    check_triangle(tris[1], V<T>(0, 0, 0), V<T>(2, 2, 0), V<T>(0, 2, 0));
+    check_triangle(tris[2], V<T>(0, 0, 0), V<T>(1, 1, 3.25), V<T>(2, 0, 0));
+    CHECK(isin::normal(tris[1]).z > T(0));
+}
+
+TEST_CASE_TEMPLATE("PLY binary: double and int16 coordinates, uint indices, a 200-gon", T, float, double) {
+    if (!host_is_little_endian()) return;
+    TempDir dir;
+    std::string file = header({"ply", "format binary_little_endian 1.0", "element vertex 200",
+                               "property double z", "property int16 x", "property float64 y",
+                               "element face 1", "property list ushort uint vertex_index"});
+    Bytes b;
+    for (int i = 0; i < 200; ++i) b.put(0.5 * i).put(static_cast<std::int16_t>(-i)).put(1e-3);
+    b.put(std::uint16_t{200});
+    for (std::uint32_t i = 0; i < 200; ++i) b.put(i);
+    const auto tris = isin::load_ply<T>(dir.put("gon.ply", file + b.data));
+    REQUIRE(tris.size() == 198);
+    check_triangle(tris[0], V<T>(0, 1e-3, 0), V<T>(-1, 1e-3, 0.5), V<T>(-2, 1e-3, 1));
+    check_triangle(tris[197], V<T>(0, 1e-3, 0), V<T>(-198, 1e-3, 99), V<T>(-199, 1e-3, 99.5));
+}
+
+TEST_CASE("load_mesh: chooses the reader by extension, in any letter case") {
+    TempDir dir;
+#if ISIN_HAVE_TINYOBJLOADER
+    CHECK(isin::load_mesh<float>(dir.put("a.obj", polygons_obj)).size() == 7);
+    CHECK(isin::load_mesh<double>(dir.put("B.OBJ", polygons_obj)).size() == 7);
+    // The content must match the extension: a PLY named .obj is read as OBJ (no faces there).
+    CHECK(isin::load_mesh<float>(dir.put("e.obj", ascii_ply)).empty());
+#endif
+    CHECK(isin::load_mesh<float>(dir.put("c.ply", ascii_ply)).size() == 3);
+    CHECK(isin::load_mesh<double>(dir.put("D.PlY", ascii_ply)).size() == 3);
+    const std::string stl = dir.put("f.stl", "solid x\n");
+    CHECK_THROWS_WITH_AS((void)isin::load_mesh<float>(stl), doctest::Contains(str(stl)), std::invalid_argument);
+    CHECK_THROWS_AS((void)isin::load_mesh<float>(dir.put("obj", polygons_obj)), std::invalid_argument);
+    CHECK_THROWS_AS((void)isin::load_mesh<float>(dir.put("g.obj.txt", polygons_obj)), std::invalid_argument);
+}
+
+TEST_CASE("missing or unreadable files throw MeshError naming the path") {
+    TempDir dir;
+    const std::string ply = (dir.path / "nothing.ply").string();
+    const std::string a = thrown([&] { (void)isin::load_mesh<float>(ply); });
+    CHECK(str(a) == doctest::Contains(str(ply)));
+    CHECK(str(a) == doctest::Contains("cannot open"));
+    const std::string d = thrown([&] { (void)isin::load_ply<double>(dir.path.string()); }); // a directory
+    CHECK(str(d) == doctest::Contains(str(dir.path.string())));
+#if ISIN_HAVE_TINYOBJLOADER
+    const std::string obj = (dir.path / "nothing.obj").string();
+    CHECK(str(thrown([&] { (void)isin::load_obj<double>(obj); })) == doctest::Contains(str(obj)));
+    CHECK(str(thrown([&] { (void)isin::load_obj<float>(dir.path.string()); })) ==
+          doctest::Contains(str(dir.path.string())));
+#endif
+    static_assert(std::is_base_of_v<std::runtime_error, isin::MeshError>);
+}
+
+#if ISIN_HAVE_TINYOBJLOADER
+TEST_CASE("OBJ: an index out of range names the file and the face's line") {
+    TempDir dir;
+    const std::string base = "v 0 0 0\nv 1 0 0\n# a comment\nv 0 1 0\n";
+    const std::string too_big = dir.put("big.obj", base + "f 1 2 3\nf 1 2 4\n");
+    std::string why = thrown([&] { (void)isin::load_obj<float>(too_big); });
+    CHECK(str(why) == doctest::Contains(str(too_big)));
+    CHECK(str(why) == doctest::Contains("line 6"));
+    CHECK(str(why) == doctest::Contains("vertex index 4 is out of range"));
+
+    const std::string too_far_back = dir.put("back.obj", base + "\n\nf -1 -2 -4\n");
+    why = thrown([&] { (void)isin::load_obj<double>(too_far_back); });
+    CHECK(str(why) == doctest::Contains("line 7"));
+    CHECK(str(why) == doctest::Contains("-4"));
+
+    // Relative indices count only the vertices read so far.
+    const std::string early = dir.put("early.obj", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n");
+    CHECK(str(thrown([&] { (void)isin::load_obj<float>(early); })) == doctest::Contains("line 3"));
+
+    // Two faces out of range, a forward one first: the first in the file is named.
+    const std::string two = dir.put("two.obj", base + "f 1 2 9\nf -9 1 2\n");
+    CHECK(str(thrown([&] { (void)isin::load_obj<float>(two); })) == doctest::Contains("line 5"));
+    const std::string two_back = dir.put("two_back.obj", base + "f -9 1 2\nf 1 2 9\n");
+    CHECK(str(thrown([&] { (void)isin::load_obj<float>(two_back); })) == doctest::Contains("line 5"));
+
+    const std::string crlf = dir.put("crlf.obj", "v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\n\r\nf 1 2 9\r\n");
+    CHECK(str(thrown([&] { (void)isin::load_obj<float>(crlf); })) == doctest::Contains("line 5"));
+
+    const std::string zero = dir.put("zero.obj", base + "f 0 1 2\n");
+    why = thrown([&] { (void)isin::load_obj<float>(zero); });
+    CHECK(str(why) == doctest::Contains("line 5"));
+    CHECK(str(why) == doctest::Contains("index 0"));
+
+    const std::string huge = dir.put("huge.obj", base + "f 1 2 4294967297\n"); // atoi would wrap it to 1
+    CHECK(str(thrown([&] { (void)isin::load_obj<float>(huge); })) == doctest::Contains("out of range"));
+}
+
+TEST_CASE("OBJ: faces with fewer than 3 vertices and malformed references throw with the line") {
+    TempDir dir;
+    const std::string base = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    std::string why = thrown([&] { (void)isin::load_obj<float>(dir.put("two.obj", base + "f 1 2\n")); });
+    CHECK(str(why) == doctest::Contains("line 4"));
+    CHECK(str(why) == doctest::Contains("needs at least 3"));
+    CHECK(str(thrown([&] { (void)isin::load_obj<float>(dir.put("none.obj", base + "f \n")); })) ==
+          doctest::Contains("line 4"));
+    why = thrown([&] { (void)isin::load_obj<float>(dir.put("junk.obj", base + "f 1 2 x\n")); });
+    CHECK(str(why) == doctest::Contains("line 4"));
+    CHECK(str(why) == doctest::Contains("'x'"));
+    CHECK_THROWS_AS((void)isin::load_obj<float>(dir.put("slash.obj", base + "f 1/ 2 3\n")), isin::MeshError);
+    CHECK_THROWS_AS((void)isin::load_obj<float>(dir.put("four.obj", base + "f 1/1/1/1 2 3\n")), isin::MeshError);
+    CHECK_THROWS_AS((void)isin::load_obj<float>(dir.put("trail.obj", base + "f 1 2 3 # c\n")), isin::MeshError);
+}
+
+TEST_CASE("OBJ: NaN, infinite, malformed or out-of-range coordinates throw with the line") {
+    TempDir dir;
+    const auto why = [&](const std::string& name, const std::string& text) {
+        return str(thrown([&] { (void)isin::load_obj<float>(dir.put(name, text)); }));
+    };
+    CHECK(why("nan.obj", "v 0 0 0\nv nan 1 2\nv 1 1 1\nf 1 2 3\n") == doctest::Contains("line 2"));
+    CHECK(why("nan2.obj", "v 0 0 0\nv 0 1 -NaN\n") == doctest::Contains("NaN"));
+    CHECK(why("inf.obj", "\n\nv inf 0 0\n") == doctest::Contains("line 3"));
+    CHECK(why("inf2.obj", "v 0 0 -Infinity\n") == doctest::Contains("infinite"));
+    CHECK(why("abc.obj", "v 1 abc 3\n") == doctest::Contains("malformed number 'abc'"));
+    CHECK(why("comma.obj", "v 0 0 0\nv 1,5 0 0\n") == doctest::Contains("line 2"));
+    CHECK(why("short.obj", "v 1 2\n") == doctest::Contains("needs 3"));
+    CHECK(why("e999.obj", "v 1e999 0 0\n") == doctest::Contains("out of range"));
+    CHECK(why("e999.obj", "v 1e999 0 0\n") == doctest::Contains("line 1"));
+    CHECK_NOTHROW((void)isin::load_obj<float>(dir.put("tiny.obj", "v 1e-999 0 0 # underflows to 0\n")));
+}
+
+TEST_CASE_TEMPLATE("OBJ: numbers tinyobjloader's arithmetic gets wrong are reread by isin", T, float, double) {
+    TempDir dir;
+    // tinyobjloader computes 0·5^500 = 0·inf = NaN for "0e500"; the text is a plain zero.
+    const auto tris = isin::load_obj<T>(dir.put("zero.obj", "v 0e500 1 2\nv 1 0 0\nv -0.0e+999 1 0\nf 1 2 3\n"));
+    REQUIRE(tris.size() == 1);
+    check_triangle(tris[0], V<T>(0, 1, 2), V<T>(1, 0, 0), V<T>(0, 1, 0));
+}
+
+#endif
+
+TEST_CASE("OBJ and PLY: 1e300 does not fit a float (line named) but loads as a double") {
+    TempDir dir;
+#if ISIN_HAVE_TINYOBJLOADER
+    const std::string obj = dir.put("big.obj", "v 0 0 0\nv 1 0 0\nv 1e300 1 0\nf 1 2 3\n");
+    const std::string why = thrown([&] { (void)isin::load_obj<float>(obj); });
+    CHECK(str(why) == doctest::Contains("line 3"));
+    CHECK(str(why) == doctest::Contains("does not fit in float"));
+    const auto tris = isin::load_obj<double>(obj);
+    REQUIRE(tris.size() == 1);
+    CHECK(tris[0].v2.x == doctest::Approx(1e300));
+#endif
+
+    const std::string ply = dir.put("big.ply", header({"ply", "format ascii 1.0", "element vertex 3",
+                                                       "property double x", "property double y",
+                                                       "property double z", "element face 1",
+                                                       "property list uchar int vertex_indices"}) +
+                                                   "0 0 0\n1 0 0\n0 -1e300 0\n3 0 1 2\n");
+    const std::string why_ply = thrown([&] { (void)isin::load_ply<float>(ply); });
+    CHECK(str(why_ply) == doctest::Contains("line 12"));
+    CHECK(str(why_ply) == doctest::Contains("does not fit in float"));
+    CHECK(isin::load_ply<double>(ply).at(0).v2.y == doctest::Approx(-1e300));
+
+    if (host_is_little_endian()) {
+        const std::string bin = dir.put("big_bin.ply", header({"ply", "format binary_little_endian 1.0",
+                                                               "element vertex 1", "property double x",
+                                                               "property double y", "property double z"}) +
+                                                           Bytes{}.put(0.0).put(1e300).put(0.0).data);
+        const std::string h = header({"ply", "format binary_little_endian 1.0", "element vertex 1",
+                                      "property double x", "property double y", "property double z"});
+        CHECK(str(thrown([&] { (void)isin::load_ply<float>(bin); })) ==
+              doctest::Contains(str("offset " + std::to_string(h.size() + 8))));
+    }
+}
+
+TEST_CASE("PLY: a huge count in the header with little data throws at once, allocating nothing big") {
+    TempDir dir;
+    const auto begin = std::chrono::steady_clock::now();
+    const std::string ascii = dir.put("huge.ply", header({"ply", "format ascii 1.0", "element vertex 4000000000",
+                                                          "property float x", "property float y",
+                                                          "property float z", "element face 4000000000",
+                                                          "property list uchar int vertex_indices"}) +
+                                                      "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    std::string why = thrown([&] { (void)isin::load_ply<float>(ascii); });
+    CHECK(str(why) == doctest::Contains("truncated"));
+    CHECK(str(why) == doctest::Contains("4000000000"));
+
+    const std::string h = header({"ply", "format binary_little_endian 1.0", "element vertex 4000000000",
+                                  "property float x", "property float y", "property float z"});
+    const std::string binary = dir.put("huge_bin.ply", h + std::string(36, '\0'));
+    why = thrown([&] { (void)isin::load_ply<double>(binary); });
+    CHECK(str(why) == doctest::Contains(str("truncated at offset " + std::to_string(h.size()))));
+    CHECK(str(why) == doctest::Contains("4000000000"));
+
+    // A face claiming 4e9 indices, with 12 bytes behind it.
+    const std::string hf = header({"ply", "format binary_little_endian 1.0", "element vertex 3",
+                                   "property uchar x", "property uchar y", "property uchar z", "element face 1",
+                                   "property list uint int vertex_indices"});
+    const std::string list = dir.put("huge_list.ply", hf + std::string(9, '\0') +
+                                                          Bytes{}.put(std::uint32_t{4000000000u}).data +
+                                                          std::string(12, '\0'));
+    why = thrown([&] { (void)isin::load_ply<float>(list); });
+    CHECK(str(why) == doctest::Contains(str("truncated at offset " + std::to_string(hf.size() + 9 + 4))));
+
+    // And a list to skip that claims 4e9 items.
+    const std::string ha = header({"ply", "format ascii 1.0", "element junk 1", "property list uint int v"});
+    CHECK(str(thrown([&] { (void)isin::load_ply<float>(dir.put("skip.ply", ha + "4000000000 1 2 3\n")); })) ==
+          doctest::Contains("truncated"));
+    CHECK(std::chrono::steady_clock::now() - begin < std::chrono::seconds(5));
+}
+
+TEST_CASE("PLY: an index out of range names the line (ASCII) or byte offset (binary)") {
+    TempDir dir;
+    const std::string h = header({"ply", "format ascii 1.0", "element vertex 4", "property float x",
+                                  "property float y", "property float z", "element face 2",
+                                  "property list uchar int vertex_indices"});
+    const std::string ascii = dir.put("range.ply", h + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n\n3 0 2 4\n");
+    std::string why = thrown([&] { (void)isin::load_ply<float>(ascii); });
+    CHECK(str(why) == doctest::Contains(str(ascii)));
+    CHECK(str(why) == doctest::Contains("line 16"));
+    CHECK(str(why) == doctest::Contains("vertex index 4 is out of range"));
+    CHECK(str(thrown([&] { (void)isin::load_ply<float>(dir.put("neg.ply", h + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
+                                                                                "3 0 -1 2\n3 0 1 2\n")); })) ==
+          doctest::Contains("line 14"));
+
+    if (host_is_little_endian()) {
+        const std::string hb = header({"ply", "format binary_little_endian 1.0", "element vertex 3",
+                                       "property float x", "property float y", "property float z",
+                                       "element face 1", "property list uchar int vertex_indices"});
+        Bytes b;
+        for (int i = 0; i < 9; ++i) b.put(static_cast<float>(i));
+        b.put(std::uint8_t{3}).put(std::int32_t{0}).put(std::int32_t{1}).put(std::int32_t{3});
+        why = thrown([&] { (void)isin::load_ply<float>(dir.put("range_bin.ply", hb + b.data)); });
+        CHECK(str(why) == doctest::Contains(str("offset " + std::to_string(hb.size() + 36 + 1 + 8))));
+        CHECK(str(why) == doctest::Contains("out of range"));
+    }
+}
+
+TEST_CASE("PLY: truncated data throws 'truncated at offset N' (binary) or at a line (ASCII)") {
+    TempDir dir;
+    const std::string hb = header({"ply", "format binary_little_endian 1.0", "element vertex 3",
+                                   "property float x", "property float y", "property float z", "element face 1",
+                                   "property list uchar int vertex_indices"});
+    Bytes b;
+    for (int i = 0; i < 9; ++i) b.put(static_cast<float>(i));
+    b.put(std::uint8_t{3}).put(std::int32_t{0}).put(std::int32_t{1}).put(std::int32_t{2});
+    CHECK(isin::load_ply<float>(dir.put("whole.ply", hb + b.data)).size() == 1);
+    // Cut inside the face's index list, then inside the second vertex.
+    std::string why = thrown([&] { (void)isin::load_ply<float>(dir.put("cut1.ply", hb + b.data.substr(0, 46))); });
+    CHECK(str(why) == doctest::Contains(str("truncated at offset " + std::to_string(hb.size() + 37))));
+    why = thrown([&] { (void)isin::load_ply<float>(dir.put("cut2.ply", hb + b.data.substr(0, 18))); });
+    CHECK(str(why) == doctest::Contains("truncated at offset"));
+
+    const std::string ha = header({"ply", "format ascii 1.0", "element vertex 3", "property float x",
+                                   "property float y", "property float z", "element face 1",
+                                   "property list uchar int vertex_indices"});
+    why = thrown([&] { (void)isin::load_ply<float>(dir.put("cut.ply", ha + "0 0 0\n1 0 0\n0 1 0\n3 0 1")); });
+    CHECK(str(why) == doctest::Contains("truncated at line 13"));
+    why = thrown([&] { (void)isin::load_ply<float>(dir.put("extra.ply", ha + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n7\n")); });
+    CHECK(str(why) == doctest::Contains("line 14"));
+    CHECK(str(why) == doctest::Contains("unexpected data"));
+}
+
+TEST_CASE("PLY: bad headers and unsupported formats throw with the line") {
+    TempDir dir;
+    const auto why = [&](const std::string& name, const std::string& text) {
+        return str(thrown([&] { (void)isin::load_ply<float>(dir.put(name, text)); }));
+    };
+    CHECK(why("magic.ply", "plx\nformat ascii 1.0\nend_header\n") == doctest::Contains("not a PLY file"));
+    CHECK(why("empty.ply", "") == doctest::Contains("not a PLY file"));
+    CHECK(why("type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty flaot x\nend_header\n") ==
+          doctest::Contains("line 4: unknown property type 'flaot'"));
+    CHECK(why("end.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n") ==
+          doctest::Contains("end_header"));
+    CHECK(why("count.ply", "ply\nformat ascii 1.0\nelement vertex -5\nend_header\n") ==
+          doctest::Contains("line 3: bad element count"));
+    CHECK(why("orphan.ply", "ply\nformat ascii 1.0\nproperty float x\nend_header\n") ==
+          doctest::Contains("line 3"));
+    CHECK(why("keyword.ply", "ply\nformat ascii 1.0\nelemnt vertex 1\nend_header\n") ==
+          doctest::Contains("line 3: unknown header keyword"));
+    CHECK(why("noformat.ply", "ply\nelement vertex 0\nend_header\n") == doctest::Contains("format"));
+    CHECK(why("version.ply", "ply\nformat ascii 2.0\nend_header\n") == doctest::Contains("line 2"));
+    CHECK(why("noz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                         "end_header\n1 2\n") == doctest::Contains("line 3: element 'vertex' has no property z"));
+    CHECK(why("floatidx.ply", "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar float vertex_indices\n"
+                              "end_header\n") == doctest::Contains("line 4"));
+    const doctest::String big_endian = why("be.ply", "ply\nformat binary_big_endian 1.0\nend_header\n");
+    CHECK(big_endian == doctest::Contains("binary_big_endian"));
+    CHECK(big_endian == doctest::Contains("not supported"));
+    CHECK(big_endian == doctest::Contains("line 2"));
+}
+
+TEST_CASE("PLY: NaN coordinates, short faces and malformed numbers throw with their position") {
+    TempDir dir;
+    const std::string ha = header({"ply", "format ascii 1.0", "element vertex 3", "property float x",
+                                   "property float y", "property float z", "element face 1",
+                                   "property list uchar int vertex_indices"});
+    const auto why = [&](const std::string& name, const std::string& text) {
+        return str(thrown([&] { (void)isin::load_ply<double>(dir.put(name, text)); }));
+    };
+    CHECK(why("nan.ply", ha + "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n") == doctest::Contains("line 11"));
+    CHECK(why("nan.ply", ha + "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n") == doctest::Contains("NaN"));
+    CHECK(why("inf.ply", ha + "0 0 0\n1 0 0\n0 1 -inf\n3 0 1 2\n") == doctest::Contains("infinite"));
+    CHECK(why("short.ply", ha + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n") == doctest::Contains("needs at least 3"));
+    CHECK(why("dots.ply", ha + "0 0 0\n1.2.3 0 0\n0 1 0\n3 0 1 2\n") == doctest::Contains("line 11"));
+    CHECK(why("uchar.ply", ha + "0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n") == doctest::Contains("out of range"));
+    if (host_is_little_endian()) {
+        const std::string hb = header({"ply", "format binary_little_endian 1.0", "element vertex 2",
+                                       "property float x", "property float y", "property float z"});
+        Bytes b;
+        b.put(0.0f).put(0.0f).put(0.0f).put(1.0f).put(std::numeric_limits<float>::quiet_NaN()).put(0.0f);
+        const doctest::String w = why("nan_bin.ply", hb + b.data);
+        CHECK(w == doctest::Contains(str("offset " + std::to_string(hb.size() + 16))));
+        CHECK(w == doctest::Contains("NaN"));
+    }
+}
