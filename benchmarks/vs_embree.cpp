@@ -1,0 +1,510 @@
+// isin's Bvh<float> against Embree 3 on the same triangles and the same rays.
+//
+// For each mesh of benchmarks/meshes.hpp: build both (Embree: RTC_BUILD_QUALITY_MEDIUM, one
+// triangle geometry, per-triangle vertices + index buffer), then trace one primary ray per pixel
+// of the note's camera (closest hit: isin `intersect`, Embree `rtcIntersect1` and, for reference,
+// `rtcIntersect16` on 4×4-pixel tiles) and one shadow ray per lit primary hit towards a point
+// light at (200, 300, −100) (any hit: isin `occluded`, Embree `rtcOccluded1`). Shadow rays are
+// built once from isin's hits (origin moved off the surface by isin::offset_origin along the
+// normal facing the eye; rays whose surface faces away from the light are not traced, as in a
+// renderer) and traced by both libraries. Rays are split into bands of 4 image rows handed out
+// to std::threads from a shared counter, identically for both libraries; every tracing thread
+// sets FTZ/DAZ (Embree's documented recommendation), isin's threads included, so both run in
+// the same floating-point mode. Figures are medians of --repeats runs, taken interleaved
+// (isin, Embree, isin, Embree, …) so that drifts of this shared machine hit both alike.
+//
+// Build times: Embree sizes its thread pool once per process (a later device with threads=1
+// still builds on every core), so each build time is measured in a fresh child process: this
+// program re-executes itself with `--build-only --mesh M --threads N`, which builds isin
+// (BvhOptions::threads = N) and Embree (a device made with "threads=N") once untimed, then
+// --repeats times each, interleaved, and prints the medians and the CPU-time/wall-time ratio
+// of each build (≈ 1.0 shows a build really ran on one thread).
+//
+// Checks: primary hit count and Σt of isin, Embree-1 and Embree-16 must agree to 1e-5 relative,
+// and so must the number of occluded shadow rays; the program exits with status 1 otherwise.
+//
+// Run: build/…/benchmarks/vs_embree [--mesh NAME] [--repeats N] [--threads-list 1,2]
+//      [--width W --height H] [--csv FILE]            (built with -march=native)
+#include <embree3/rtcore.h>
+#include <pmmintrin.h>
+#include <sys/resource.h>
+#include <unistd.h>
+#include <xmmintrin.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <isin/bvh.hpp>
+#include <isin/camera.hpp>
+#include <isin/offset.hpp>
+
+#include "meshes.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Tri = isin::Triangle<float>;
+constexpr float inf = std::numeric_limits<float>::infinity();
+constexpr double not_measured = std::numeric_limits<double>::quiet_NaN();
+constexpr double tolerance = 1e-5;
+
+struct Options {
+    std::vector<std::string> meshes = meshes::names();
+    int repeats = 5;
+    std::vector<int> threads = {1, 2};
+    int width = 1920, height = 1080;
+    std::string csv;
+    bool build_only = false; // child mode: time the builds of one mesh with `build_threads`
+    int build_threads = 1;
+    std::string self;        // this program, re-executed for the build times
+};
+
+void set_fp_mode() { // Embree's recommendation for every thread that calls it
+    // = _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON) + _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON),
+    // spelled out because the DAZ macro trips -Wsign-conversion.
+    _mm_setcsr(_mm_getcsr() | unsigned(_MM_FLUSH_ZERO_ON) | unsigned(_MM_DENORMALS_ZERO_ON));
+}
+
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+double cpu_seconds() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_utime.tv_sec) + double(u.ru_stime.tv_sec) +
+           1e-6 * (double(u.ru_utime.tv_usec) + double(u.ru_stime.tv_usec));
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+double relative(double a, double b) { return std::fabs(a - b) / std::max({std::fabs(a), std::fabs(b), 1.0}); }
+
+// ---- Embree ------------------------------------------------------------------------------------
+
+void embree_error(void*, RTCError code, const char* message) {
+    std::fprintf(stderr, "Embree error %d: %s\n", int(code), message ? message : "");
+    std::exit(3);
+}
+
+RTCDevice new_device(int threads) {
+    const std::string config = threads > 0 ? "threads=" + std::to_string(threads) : std::string();
+    RTCDevice device = rtcNewDevice(config.c_str());
+    if (!device) {
+        std::fprintf(stderr, "rtcNewDevice(\"%s\") failed\n", config.c_str());
+        std::exit(3);
+    }
+    rtcSetDeviceErrorFunction(device, embree_error, nullptr);
+    return device;
+}
+
+// One triangle geometry; vertex i of triangle k is vertex 3k + i (the triangles are a soup to
+// Embree as to isin). Everything from the triangle vector to the committed scene is timed.
+RTCScene new_scene(RTCDevice device, const std::vector<Tri>& tris) {
+    RTCScene scene = rtcNewScene(device);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
+    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_MEDIUM);
+    const std::size_t n = tris.size();
+    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                 3 * sizeof(float), 3 * n));
+    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(unsigned), n));
+    for (std::size_t k = 0; k < n; ++k) {
+        const isin::Vertex<float>* v[3] = {&tris[k].v0, &tris[k].v1, &tris[k].v2};
+        for (std::size_t i = 0; i < 3; ++i) {
+            vertices[9 * k + 3 * i] = v[i]->x, vertices[9 * k + 3 * i + 1] = v[i]->y, vertices[9 * k + 3 * i + 2] = v[i]->z;
+            indices[3 * k + i] = unsigned(3 * k + i);
+        }
+    }
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(scene, geometry);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(scene);
+    return scene;
+}
+
+// ---- the frame: bands of 4 rows over threads -----------------------------------------------------
+
+struct Totals {
+    std::uint64_t hits = 0;
+    double sum_t = 0;
+};
+
+// Calls band(b, totals_b) for every band b across `threads` std::threads (FTZ/DAZ set in each);
+// returns the wall time and the totals, summed in band order (the same for any thread count).
+template <class Band>
+Totals run_bands(int bands, int threads, double& seconds, Band&& band) {
+    std::vector<Totals> per(std::size_t(std::max(bands, 0)));
+    std::atomic<int> next{0};
+    const auto worker = [&] {
+        set_fp_mode();
+        for (int b; (b = next.fetch_add(1, std::memory_order_relaxed)) < bands;) band(b, per[std::size_t(b)]);
+    };
+    const auto t0 = Clock::now();
+    std::vector<std::thread> pool;
+    for (int i = 0; i < threads; ++i) pool.emplace_back(worker);
+    for (auto& t : pool) t.join();
+    seconds = since(t0);
+    Totals total;
+    for (const Totals& p : per) total.hits += p.hits, total.sum_t += p.sum_t;
+    return total;
+}
+
+struct ShadowRay {
+    isin::Ray<float> ray;
+    float t_max;
+};
+
+struct Bench {
+    const Options& opt;
+    isin::Camera<float> camera;
+    int bands;
+    const isin::Bvh<float>& bvh;
+    RTCScene scene;
+    std::vector<ShadowRay> shadow;
+    std::vector<std::size_t> shadow_begin; // per band: first shadow ray; bands + 1 entries
+
+    Bench(const Options& o, const isin::Bvh<float>& b, RTCScene s, const std::vector<Tri>& tris)
+        : opt(o), camera(o.width, o.height), bands((o.height + 3) / 4), bvh(b), scene(s) {
+        const isin::Vertex<float> light{200.0f, 300.0f, -100.0f};
+        shadow_begin.push_back(0);
+        for (int band = 0; band < bands; ++band) {
+            for (int y = 4 * band; y < std::min(4 * band + 4, opt.height); ++y)
+                for (int x = 0; x < opt.width; ++x) {
+                    const isin::Ray<float> ray = camera.primary_ray(float(x), float(y));
+                    const isin::BvhHit<float> hit = bvh.intersect(ray);
+                    if (!hit) continue;
+                    isin::Vertex<float> n = isin::normalize(isin::normal(tris[hit.primitive]));
+                    if (isin::dot(n, ray.direction) > 0.0f) n = -n; // the side the eye sees
+                    const isin::Vertex<float> origin = isin::offset_origin(ray.at(hit.t), n, isin::max_abs(ray.origin));
+                    const isin::Vertex<float> to_light = light - origin;
+                    if (!(isin::dot(n, to_light) > 0.0f)) continue; // faces away from the light
+                    const float distance = isin::length(to_light);
+                    shadow.push_back({{origin, to_light / distance}, distance});
+                }
+            shadow_begin.push_back(shadow.size());
+        }
+    }
+
+    Totals isin_primary(int threads, double& s) const {
+        return run_bands(bands, threads, s, [&](int band, Totals& out) {
+            Totals acc;
+            for (int y = 4 * band; y < std::min(4 * band + 4, opt.height); ++y)
+                for (int x = 0; x < opt.width; ++x) {
+                    const isin::BvhHit<float> hit = bvh.intersect(camera.primary_ray(float(x), float(y)));
+                    if (hit) ++acc.hits, acc.sum_t += double(hit.t);
+                }
+            out = acc;
+        });
+    }
+
+    Totals embree1_primary(int threads, double& s) const {
+        return run_bands(bands, threads, s, [&](int band, Totals& out) {
+            RTCIntersectContext context;
+            rtcInitIntersectContext(&context);
+            Totals acc;
+            for (int y = 4 * band; y < std::min(4 * band + 4, opt.height); ++y)
+                for (int x = 0; x < opt.width; ++x) {
+                    const isin::Ray<float> ray = camera.primary_ray(float(x), float(y));
+                    RTCRayHit rh;
+                    rh.ray.org_x = ray.origin.x, rh.ray.org_y = ray.origin.y, rh.ray.org_z = ray.origin.z;
+                    rh.ray.dir_x = ray.direction.x, rh.ray.dir_y = ray.direction.y, rh.ray.dir_z = ray.direction.z;
+                    rh.ray.tnear = 0.0f, rh.ray.tfar = inf, rh.ray.time = 0.0f;
+                    rh.ray.mask = ~0u, rh.ray.id = 0, rh.ray.flags = 0;
+                    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                    rtcIntersect1(scene, &context, &rh);
+                    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) ++acc.hits, acc.sum_t += double(rh.ray.tfar);
+                }
+            out = acc;
+        });
+    }
+
+    Totals embree16_primary(int threads, double& s) const {
+        return run_bands(bands, threads, s, [&](int band, Totals& out) {
+            RTCIntersectContext context;
+            rtcInitIntersectContext(&context);
+            context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT; // primary rays of a 4×4 tile
+            Totals acc;
+            RTCRayHit16 rh;
+            alignas(64) int valid[16];
+            for (int x0 = 0; x0 < opt.width; x0 += 4) {
+                for (int k = 0; k < 16; ++k) {
+                    const int x = x0 + k % 4, y = 4 * band + k / 4;
+                    valid[k] = x < opt.width && y < opt.height ? -1 : 0;
+                    const isin::Ray<float> ray = camera.primary_ray(float(std::min(x, opt.width - 1)),
+                                                                    float(std::min(y, opt.height - 1)));
+                    rh.ray.org_x[k] = ray.origin.x, rh.ray.org_y[k] = ray.origin.y, rh.ray.org_z[k] = ray.origin.z;
+                    rh.ray.dir_x[k] = ray.direction.x, rh.ray.dir_y[k] = ray.direction.y, rh.ray.dir_z[k] = ray.direction.z;
+                    rh.ray.tnear[k] = 0.0f, rh.ray.tfar[k] = inf, rh.ray.time[k] = 0.0f;
+                    rh.ray.mask[k] = ~0u, rh.ray.id[k] = 0, rh.ray.flags[k] = 0;
+                    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                }
+                rtcIntersect16(valid, scene, &context, &rh);
+                for (int k = 0; k < 16; ++k)
+                    if (valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) ++acc.hits, acc.sum_t += double(rh.ray.tfar[k]);
+            }
+            out = acc;
+        });
+    }
+
+    Totals isin_shadow(int threads, double& s) const {
+        return run_bands(bands, threads, s, [&](int band, Totals& out) {
+            Totals acc;
+            for (std::size_t i = shadow_begin[std::size_t(band)]; i < shadow_begin[std::size_t(band) + 1]; ++i)
+                if (bvh.occluded(shadow[i].ray, shadow[i].t_max)) ++acc.hits;
+            out = acc;
+        });
+    }
+
+    Totals embree1_shadow(int threads, double& s) const {
+        return run_bands(bands, threads, s, [&](int band, Totals& out) {
+            RTCIntersectContext context;
+            rtcInitIntersectContext(&context);
+            Totals acc;
+            for (std::size_t i = shadow_begin[std::size_t(band)]; i < shadow_begin[std::size_t(band) + 1]; ++i) {
+                const ShadowRay& r = shadow[i];
+                RTCRay ray;
+                ray.org_x = r.ray.origin.x, ray.org_y = r.ray.origin.y, ray.org_z = r.ray.origin.z;
+                ray.dir_x = r.ray.direction.x, ray.dir_y = r.ray.direction.y, ray.dir_z = r.ray.direction.z;
+                ray.tnear = 0.0f, ray.tfar = r.t_max, ray.time = 0.0f;
+                ray.mask = ~0u, ray.id = 0, ray.flags = 0;
+                rtcOccluded1(scene, &context, &ray);
+                if (ray.tfar < 0.0f) ++acc.hits; // Embree sets tfar = −∞ when occluded
+            }
+            out = acc;
+        });
+    }
+};
+
+// ---- build times (child process) -----------------------------------------------------------------
+
+int build_only(const Options& opt) {
+    set_fp_mode();
+    const std::vector<Tri> tris = meshes::make<float>(opt.meshes.front());
+    RTCDevice device = new_device(opt.build_threads);
+    isin::BvhOptions bo;
+    bo.threads = opt.build_threads;
+    std::vector<double> isin_ms, embree_ms, isin_cpu, embree_cpu;
+    std::size_t check = 0;
+    for (int rep = -1; rep < opt.repeats; ++rep) { // rep −1: warm-up (Embree's thread pool, page faults)
+        double c0 = cpu_seconds();
+        auto t0 = Clock::now();
+        {
+            const isin::Bvh<float> bvh{tris, bo};
+            const double s = since(t0), c = cpu_seconds() - c0;
+            check += bvh.node_count();
+            if (rep >= 0) isin_ms.push_back(1e3 * s), isin_cpu.push_back(c / s);
+        }
+        c0 = cpu_seconds();
+        t0 = Clock::now();
+        RTCScene scene = new_scene(device, tris);
+        const double s = since(t0), c = cpu_seconds() - c0;
+        if (rep >= 0) embree_ms.push_back(1e3 * s), embree_cpu.push_back(c / s);
+        rtcReleaseScene(scene);
+    }
+    rtcReleaseDevice(device);
+    std::printf("BUILD %.3f %.3f %.3f %.3f %zu\n", median(isin_ms), median(isin_cpu), median(embree_ms),
+                median(embree_cpu), check);
+    return 0;
+}
+
+struct BuildTimes {
+    double isin_ms = not_measured, isin_cpu = not_measured, embree_ms = not_measured, embree_cpu = not_measured;
+};
+
+BuildTimes child_build(const Options& opt, const std::string& mesh, int threads) {
+    const std::string command = "'" + opt.self + "' --build-only --mesh '" + mesh + "' --threads " +
+                                std::to_string(threads) + " --repeats " + std::to_string(opt.repeats);
+    BuildTimes b;
+    FILE* pipe = popen(command.c_str(), "r");
+    if (!pipe) return b;
+    char line[512];
+    while (std::fgets(line, sizeof line, pipe)) {
+        unsigned long long check = 0;
+        if (std::sscanf(line, "BUILD %lf %lf %lf %lf %llu", &b.isin_ms, &b.isin_cpu, &b.embree_ms, &b.embree_cpu, &check) != 5)
+            std::fputs(line, stderr);
+    }
+    if (pclose(pipe) != 0) std::fprintf(stderr, "build child failed: %s\n", command.c_str());
+    return b;
+}
+
+// ---- main ------------------------------------------------------------------------------------------
+
+std::vector<int> parse_list(const char* s) {
+    std::vector<int> out;
+    for (const char* p = s; *p;) {
+        char* end = nullptr;
+        const long v = std::strtol(p, &end, 10);
+        if (end == p) throw std::invalid_argument(std::string("bad --threads-list '") + s + "'");
+        if (v >= 1 && v <= 256) out.push_back(int(v));
+        p = *end == ',' ? end + 1 : end;
+        if (*end && *end != ',') throw std::invalid_argument(std::string("bad --threads-list '") + s + "'");
+    }
+    return out;
+}
+
+void usage(FILE* f) {
+    std::fprintf(f,
+        "usage: vs_embree [--mesh NAME] [--repeats N] [--threads-list 1,2] [--width W] [--height H] [--csv FILE]\n"
+        "isin's Bvh<float> against Embree %d.%d.%d (RTC_BUILD_QUALITY_MEDIUM) on the same triangles and rays:\n"
+        "build times (each thread count in a fresh child process), primary rays of the note's camera\n"
+        "(isin intersect, rtcIntersect1, rtcIntersect16 on 4x4 tiles) and shadow rays (occluded,\n"
+        "rtcOccluded1); medians of N runs (default 5). Meshes:",
+        RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH);
+    for (const auto& m : meshes::names()) std::fprintf(f, " %s", m.c_str());
+    std::fprintf(f, "\n--csv appends one row per mesh and thread count. Exit status 1 when the\n"
+                    "libraries' hit counts or sums of t differ by more than 1e-5 (relative).\n");
+}
+
+int run(const Options& opt) {
+    set_fp_mode();
+    std::FILE* csv = nullptr;
+    if (!opt.csv.empty()) {
+        csv = std::fopen(opt.csv.c_str(), "a");
+        if (!csv) { std::fprintf(stderr, "cannot open %s\n", opt.csv.c_str()); return 2; }
+        if (std::ftell(csv) == 0)
+            std::fprintf(csv, "mesh,triangles,threads,build_isin_ms,build_embree_ms,isin_mrays,embree1_mrays,"
+                              "embree16_mrays,isin_over_embree1,shadow_isin_mrays,shadow_embree1_mrays,"
+                              "shadow_isin_over_embree1,width,height\n");
+    }
+    std::printf("isin Bvh<float> vs Embree %d.%d.%d (MEDIUM), %dx%d primary rays, light (200,300,-100), "
+                "median of %d, %u hardware threads, FTZ/DAZ on in every tracing thread, -march=native\n",
+                RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, opt.width, opt.height, opt.repeats,
+                std::thread::hardware_concurrency());
+    std::printf("%-15s %9s %3s | %8s %8s | %6s %6s %6s %6s | %7s %6s %6s %6s\n", "", "", "", "build ms", "",
+                "primary", "Mray/s", "", "", "shadow", "Mray/s", "", "");
+    std::printf("%-15s %9s %3s | %8s %8s | %6s %6s %6s %6s | %7s %6s %6s %6s\n", "mesh", "triangles", "thr",
+                "isin", "Embree", "isin", "E-1", "E-16", "isin/1", "rays", "isin", "E-1", "isin/1");
+    bool all_ok = true;
+    RTCDevice device = new_device(0);
+    for (const std::string& name : opt.meshes) {
+        auto t0 = Clock::now();
+        const std::vector<Tri> tris = meshes::make<float>(name);
+        const double gen_s = since(t0);
+        std::vector<BuildTimes> builds;
+        for (int threads : opt.threads) builds.push_back(child_build(opt, name, threads));
+        t0 = Clock::now();
+        const isin::Bvh<float> bvh{tris};
+        RTCScene scene = new_scene(device, tris);
+        const Bench bench(opt, bvh, scene, tris);
+        const double setup_s = since(t0);
+
+        Totals ref[3], shadow_ref[2];
+        bool ok = true;
+        for (std::size_t ti = 0; ti < opt.threads.size(); ++ti) {
+            const int threads = opt.threads[ti];
+            std::vector<double> s[5];
+            Totals tot[5];
+            for (int rep = 0; rep < opt.repeats; ++rep) {
+                double sec = 0;
+                tot[0] = bench.isin_primary(threads, sec), s[0].push_back(sec);
+                tot[1] = bench.embree1_primary(threads, sec), s[1].push_back(sec);
+                tot[2] = bench.embree16_primary(threads, sec), s[2].push_back(sec);
+            }
+            for (int rep = 0; rep < opt.repeats; ++rep) {
+                double sec = 0;
+                tot[3] = bench.isin_shadow(threads, sec), s[3].push_back(sec);
+                tot[4] = bench.embree1_shadow(threads, sec), s[4].push_back(sec);
+            }
+            const double primary = double(opt.width) * double(opt.height), shadows = double(bench.shadow.size());
+            double mrays[5];
+            for (int m = 0; m < 5; ++m) mrays[m] = (m < 3 ? primary : shadows) / median(s[m]) * 1e-6;
+            const BuildTimes& b = builds[ti];
+            std::printf("%-15s %9zu %3d | %8.1f %8.1f | %6.2f %6.2f %6.2f %6.2f | %7zu %6.2f %6.2f %6.2f\n",
+                        name.c_str(), tris.size(), threads, b.isin_ms, b.embree_ms, mrays[0], mrays[1], mrays[2],
+                        mrays[0] / mrays[1], bench.shadow.size(), mrays[3], mrays[4], mrays[3] / mrays[4]);
+            std::fflush(stdout);
+            if (csv)
+                std::fprintf(csv, "%s,%zu,%d,%.3f,%.3f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%d\n", name.c_str(),
+                             tris.size(), threads, b.isin_ms, b.embree_ms, mrays[0], mrays[1], mrays[2],
+                             mrays[0] / mrays[1], mrays[3], mrays[4], mrays[3] / mrays[4], opt.width, opt.height);
+            if (ti == 0) {
+                for (int m = 0; m < 3; ++m) ref[m] = tot[m];
+                for (int m = 0; m < 2; ++m) shadow_ref[m] = tot[3 + m];
+            }
+            // Results must not depend on the thread count.
+            for (int m = 0; m < 3; ++m) ok = ok && tot[m].hits == ref[m].hits && relative(tot[m].sum_t, ref[m].sum_t) < 1e-12;
+            for (int m = 0; m < 2; ++m) ok = ok && tot[3 + m].hits == shadow_ref[m].hits;
+        }
+        const bool primary_ok = relative(double(ref[0].hits), double(ref[1].hits)) <= tolerance &&
+                                relative(double(ref[0].hits), double(ref[2].hits)) <= tolerance &&
+                                relative(ref[0].sum_t, ref[1].sum_t) <= tolerance &&
+                                relative(ref[0].sum_t, ref[2].sum_t) <= tolerance;
+        const bool shadow_ok = relative(double(shadow_ref[0].hits), double(shadow_ref[1].hits)) <= tolerance;
+        ok = ok && primary_ok && shadow_ok;
+        all_ok = all_ok && ok;
+        std::printf("  %s %s: hits isin %llu E-1 %llu E-16 %llu (%.1f%% of rays); sum t isin %.9g E-1 %.9g E-16 %.9g;"
+                    " occluded isin %llu E-1 %llu\n", ok ? "OK" : "MISMATCH", name.c_str(),
+                    static_cast<unsigned long long>(ref[0].hits), static_cast<unsigned long long>(ref[1].hits),
+                    static_cast<unsigned long long>(ref[2].hits), 100.0 * double(ref[0].hits) / (double(opt.width) * double(opt.height)),
+                    ref[0].sum_t, ref[1].sum_t, ref[2].sum_t, static_cast<unsigned long long>(shadow_ref[0].hits),
+                    static_cast<unsigned long long>(shadow_ref[1].hits));
+        std::printf("  builds (child process each):");
+        for (std::size_t ti = 0; ti < opt.threads.size(); ++ti)
+            std::printf(" %d thr: isin %.1f ms (cpu/wall %.2f), Embree %.1f ms (cpu/wall %.2f);", opt.threads[ti],
+                        builds[ti].isin_ms, builds[ti].isin_cpu, builds[ti].embree_ms, builds[ti].embree_cpu);
+        std::printf(" mesh %.2f s, setup %.2f s\n", gen_s, setup_s);
+        std::fflush(stdout);
+        rtcReleaseScene(scene);
+    }
+    rtcReleaseDevice(device);
+    if (csv) std::fclose(csv);
+    std::printf("%s\n", all_ok ? "all checks OK" : "MISMATCH between isin and Embree (see above)");
+    return all_ok ? 0 : 1;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    Options opt;
+    try {
+        for (int i = 1; i < argc; ++i) {
+            const std::string a = argv[i];
+            const auto value = [&]() -> const char* {
+                if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+                return argv[++i];
+            };
+            if (a == "--help" || a == "-h") { usage(stdout); return 0; }
+            else if (a == "--mesh") {
+                const std::string m = value();
+                if (std::find(meshes::names().begin(), meshes::names().end(), m) == meshes::names().end())
+                    throw std::invalid_argument("unknown mesh '" + m + "'");
+                opt.meshes = {m};
+            }
+            else if (a == "--repeats") opt.repeats = std::max(1, std::atoi(value()));
+            else if (a == "--threads-list") opt.threads = parse_list(value());
+            else if (a == "--width") opt.width = std::atoi(value());
+            else if (a == "--height") opt.height = std::atoi(value());
+            else if (a == "--csv") opt.csv = value();
+            else if (a == "--build-only") opt.build_only = true;
+            else if (a == "--threads") opt.build_threads = std::max(1, std::atoi(value()));
+            else throw std::invalid_argument("unknown option " + a);
+        }
+        if (opt.threads.empty()) throw std::invalid_argument("empty --threads-list");
+        if (opt.width < 2 || opt.height < 2 || opt.width > isin::Camera<float>::max_side ||
+            opt.height > isin::Camera<float>::max_side)
+            throw std::invalid_argument("--width/--height outside [2, 32768]");
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "vs_embree: %s\n", e.what());
+        usage(stderr);
+        return 2;
+    }
+    if (opt.build_only) return build_only(opt);
+    char path[4096];
+    const ssize_t len = readlink("/proc/self/exe", path, sizeof path - 1);
+    opt.self = len > 0 ? std::string(path, std::size_t(len)) : std::string(argv[0]);
+    return run(opt);
+}
