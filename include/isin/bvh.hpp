@@ -74,6 +74,40 @@ struct Box {
     }
 };
 
+// A box as two 4-lane vectors (x, y, z, unused), so that growing it is two vector min/max: the
+// binning loop's inner operation. Falls back to scalar lanes without vector extensions.
+#if ISIN_VECTOR_EXTENSIONS
+template <class T> struct Lanes4 { typedef T type __attribute__((vector_size(4 * sizeof(T)))); };
+template <class T> using L4 = typename Lanes4<T>::type;
+#else
+template <class T> struct L4 {
+    T v[4];
+    T& operator[](int i) noexcept { return v[i]; }
+    const T& operator[](int i) const noexcept { return v[i]; }
+};
+#endif
+template <class T>
+struct Box4 {
+    L4<T> lo, hi;
+    Box4() noexcept {
+        for (int a = 0; a < 4; ++a) lo[a] = std::numeric_limits<T>::infinity(), hi[a] = -std::numeric_limits<T>::infinity();
+    }
+    void grow(const L4<T>& plo, const L4<T>& phi) noexcept {
+#if ISIN_VECTOR_EXTENSIONS
+        lo = lo < plo ? lo : plo;
+        hi = hi > phi ? hi : phi;
+#else
+        for (int a = 0; a < 4; ++a) lo[a] = std::min(lo[a], plo[a]), hi[a] = std::max(hi[a], phi[a]);
+#endif
+    }
+    void grow(const Box4& b) noexcept { grow(b.lo, b.hi); }
+    [[nodiscard]] Box<T> box() const noexcept {
+        Box<T> b;
+        if (lo[0] <= hi[0]) b.lo = {lo[0], lo[1], lo[2]}, b.hi = {hi[0], hi[1], hi[2]};
+        return b;
+    }
+};
+
 // A node of the binary SAH tree, before it is collapsed to 8-wide nodes.
 template <class T>
 struct BinaryNode {
@@ -139,9 +173,9 @@ private:
     };
 
     struct Prim {
-        detail::Box<T> box;
-        Vertex<T> centroid;
+        detail::L4<T> lo, hi, centroid; // lanes x, y, z, unused
         std::uint32_t index;
+        [[nodiscard]] T center(int axis) const noexcept { return centroid[axis]; }
     };
 
     // ---- build -------------------------------------------------------------------------
@@ -154,9 +188,14 @@ private:
             if (!is_finite(tri.v0) || !is_finite(tri.v1) || !is_finite(tri.v2)) continue;
             const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
             if (detail::is_degenerate(e1, e2, cross(e1, e2))) continue;
+            detail::Box<T> b;
+            b.grow(tri.v0), b.grow(tri.v1), b.grow(tri.v2);
             Prim p;
-            p.box.grow(tri.v0), p.box.grow(tri.v1), p.box.grow(tri.v2);
-            p.centroid = (p.box.lo + p.box.hi) * T(0.5);
+            for (int a = 0; a < 3; ++a) {
+                p.lo[a] = component(b.lo, a), p.hi[a] = component(b.hi, a);
+                p.centroid[a] = (p.lo[a] + p.hi[a]) * T(0.5);
+            }
+            p.lo[3] = p.hi[3] = p.centroid[3] = T(0);
             p.index = static_cast<std::uint32_t>(i);
             prims.push_back(p);
         }
@@ -166,9 +205,10 @@ private:
         leaf_size_ = std::clamp(options.leaf_size, 1, 8);
         const int hw = int(std::thread::hardware_concurrency());
         std::atomic<int> threads_left{std::max(1, options.threads > 0 ? options.threads : hw) - 1};
-        detail::Box<T> box, centroids;
-        for (const Prim& p : prims) box.grow(p.box), centroids.grow(p.centroid);
-        auto root = build_binary(prims, 0, static_cast<std::uint32_t>(prims.size()), box, centroids, 0, threads_left);
+        detail::Box4<T> box, centroids;
+        for (const Prim& p : prims) box.grow(p.lo, p.hi), centroids.grow(p.centroid, p.centroid);
+        auto root = build_binary(prims, 0, static_cast<std::uint32_t>(prims.size()), box.box(), centroids.box(), 0,
+                                 threads_left);
         nodes_.reserve(prims.size() / 4 + 1);
         blocks_.reserve(prims.size() / 2 + 1);
         if (root->leaf()) { // a single leaf: a root node with one child
@@ -196,7 +236,7 @@ private:
 
         constexpr int bins = 16;
         struct Bin {
-            detail::Box<T> box, centroids;
+            detail::Box4<T> box, centroids;
             std::uint32_t n = 0;
         };
         Bin bin[3][bins];
@@ -212,8 +252,8 @@ private:
             for (std::uint32_t i = first; i < first + count; ++i) {
                 const Prim& p = prims[i];
                 for (int a = 0; a < 3; ++a) {
-                    Bin& b = bin[a][int((component(p.centroid, a) - lo[a]) * scale[a])];
-                    b.box.grow(p.box), b.centroids.grow(p.centroid), ++b.n;
+                    Bin& b = bin[a][int((p.centroid[a] - lo[a]) * scale[a])];
+                    b.box.grow(p.lo, p.hi), b.centroids.grow(p.centroid, p.centroid), ++b.n;
                 }
             }
         // Sweep: cost = Σ area · count over the two sides.
@@ -226,10 +266,10 @@ private:
             detail::Box<T> acc;
             std::uint32_t acc_n = 0;
             for (int b = bins - 1; b > 0; --b)
-                acc.grow(bin[a][b].box), acc_n += bin[a][b].n, right_area[b] = acc.half_area(), right_n[b] = acc_n;
+                acc.grow(bin[a][b].box.box()), acc_n += bin[a][b].n, right_area[b] = acc.half_area(), right_n[b] = acc_n;
             acc = {}, acc_n = 0;
             for (int b = 0; b < bins - 1; ++b) {
-                acc.grow(bin[a][b].box), acc_n += bin[a][b].n;
+                acc.grow(bin[a][b].box.box()), acc_n += bin[a][b].n;
                 if (acc_n == 0 || right_n[b + 1] == 0) continue;
                 const T cost = acc.half_area() * T(acc_n) + right_area[b + 1] * T(right_n[b + 1]);
                 if (cost < best_cost) best_cost = cost, best_axis = a, best_split = b;
@@ -245,19 +285,21 @@ private:
             for (int b = 0; b < bins; ++b) {
                 detail::Box<T>& side = b <= best_split ? left_box : right_box;
                 detail::Box<T>& side_c = b <= best_split ? left_centroids : right_centroids;
-                if (bin[a][b].n) side.grow(bin[a][b].box), side_c.grow(bin[a][b].centroids);
+                if (bin[a][b].n) side.grow(bin[a][b].box.box()), side_c.grow(bin[a][b].centroids.box());
             }
             const auto middle = std::partition(prims.begin() + first, prims.begin() + first + count, [&](const Prim& p) {
-                return int((component(p.centroid, a) - lo[a]) * scale[a]) <= best_split;
+                return int((p.centroid[a] - lo[a]) * scale[a]) <= best_split;
             });
             mid = static_cast<std::uint32_t>(middle - prims.begin());
         } else { // deep, or all centroids coincide: split at the median of the widest axis
             const int a = extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2) : (extent.y >= extent.z ? 1 : 2);
             mid = first + count / 2;
             std::nth_element(prims.begin() + first, prims.begin() + mid, prims.begin() + first + count,
-                             [a](const Prim& p, const Prim& q) { return component(p.centroid, a) < component(q.centroid, a); });
-            for (std::uint32_t i = first; i < mid; ++i) left_box.grow(prims[i].box), left_centroids.grow(prims[i].centroid);
-            for (std::uint32_t i = mid; i < first + count; ++i) right_box.grow(prims[i].box), right_centroids.grow(prims[i].centroid);
+                             [a](const Prim& p, const Prim& q) { return p.centroid[a] < q.centroid[a]; });
+            detail::Box4<T> lb, lc, rb, rc;
+            for (std::uint32_t i = first; i < mid; ++i) lb.grow(prims[i].lo, prims[i].hi), lc.grow(prims[i].centroid, prims[i].centroid);
+            for (std::uint32_t i = mid; i < first + count; ++i) rb.grow(prims[i].lo, prims[i].hi), rc.grow(prims[i].centroid, prims[i].centroid);
+            left_box = lb.box(), left_centroids = lc.box(), right_box = rb.box(), right_centroids = rc.box();
         }
 
         const std::uint32_t left_count = mid - first, right_count = count - left_count;
@@ -580,6 +622,16 @@ private:
                     mask &= mask - 1;
                     if (!mask) { // one child: go on with it directly
                         ref = n.child[k];
+                        continue;
+                    }
+                    if (any_hit) { // any hit will do: no ordering, push the others as they come
+                        const std::uint32_t first_child = n.child[k];
+                        while (mask) {
+                            k = lowest_bit(mask);
+                            mask &= mask - 1;
+                            stack[top++] = {n.child[k], t_near[k]};
+                        }
+                        ref = first_child;
                         continue;
                     }
                     // Several: visit the nearest next, push the rest farthest first.
