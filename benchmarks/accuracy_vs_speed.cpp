@@ -14,11 +14,10 @@
 #include <utility>
 #include <vector>
 
+#include "batch_kernels.hpp"
 #include "methods.hpp"
 #include "workloads.hpp"
 
-double batch_ns_per_test_mt_float(int repeats);
-double batch_ns_per_test_mt_double(int repeats);
 
 namespace {
 
@@ -57,7 +56,7 @@ struct Row {
     double param = 0;
     long n = 0, false_hits = 0, false_misses = 0, leaks = 0, doubles = 0, self_hits = 0, missed_exits = 0;
     std::vector<double> t_errors;
-    double ns = 0;
+    double ns = 0, ns_batch = 0, batch_agreement = 0;
     long errors() const { return false_hits + false_misses + leaks + self_hits + missed_exits; }
 };
 
@@ -171,6 +170,7 @@ struct TriangleWorkloads {
 template <template <class> class M, class T>
 void triangle_method(std::vector<Row>& rows, const TriangleWorkloads<T>& w, int repeats, double ns_override = 0) {
     const double ns = ns_override > 0 ? ns_override : time_triangles<M, T>(repeats);
+    const BatchResult b = ns_override > 0 ? BatchResult{} : batch_triangle_method(M<T>::name, sizeof(T) == 4, repeats);
     std::vector<Row> mine;
     mine.push_back(judge<M, T>("random", "random", 0, w.random));
     for (const auto& [angle, j] : w.grazing) mine.push_back(judge<M, T>("grazing", "grazing-angle", angle, j));
@@ -179,7 +179,7 @@ void triangle_method(std::vector<Row>& rows, const TriangleWorkloads<T>& w, int 
     for (const auto& [aspect, j] : w.slivers) mine.push_back(judge<M, T>("sliver", "sliver-aspect", aspect, j));
     mine.push_back(judge_mesh<M, T>("closed-sphere", w.sphere));
     mine.push_back(judge_mesh<M, T>("flat-grid", w.grid));
-    for (auto& r : mine) r.ns = ns, rows.push_back(r);
+    for (auto& r : mine) r.ns = ns, r.ns_batch = b.ns, r.batch_agreement = b.agreement, rows.push_back(r);
 }
 
 // Spheres: rays restarted on the surface (secondary rays) for radii 1e-3…1e6, centres up to 1e6
@@ -229,7 +229,8 @@ void sphere_method(std::vector<Row>& rows, int repeats) {
                      double(rays.size() * list.size()));
     }
     if (checksum == 42) std::printf(" ");
-    for (auto& r : mine) r.ns = quantile(ns, 0.5), rows.push_back(r);
+    const BatchResult b = batch_sphere_method(M<T>::name, sizeof(T) == 4, repeats);
+    for (auto& r : mine) r.ns = quantile(ns, 0.5), r.ns_batch = b.ns, r.batch_agreement = b.agreement, rows.push_back(r);
 }
 
 template <class T>
@@ -271,32 +272,34 @@ int main(int argc, char** argv) {
 
     FILE* f = std::fopen(csv.c_str(), "w");
     if (!f) { std::perror(csv.c_str()); return 1; }
-    std::fprintf(f, "group,method,precision,workload,param,n,ns_per_test,false_hits,false_misses,leaks,doubles,self_hits,missed_exits,t_err_median,t_err_p999\n");
+    std::fprintf(f, "group,method,precision,workload,param,n,ns_per_test,false_hits,false_misses,leaks,doubles,self_hits,missed_exits,t_err_median,t_err_p999,ns_per_test_batch,batch_agreement\n");
     for (const auto& r : rows)
-        std::fprintf(f, "%s,%s,%s,%s,%g,%ld,%.3f,%ld,%ld,%ld,%ld,%ld,%ld,%.3g,%.3g\n", r.group.c_str(), r.method.c_str(),
+        std::fprintf(f, "%s,%s,%s,%s,%g,%ld,%.3f,%ld,%ld,%ld,%ld,%ld,%ld,%.3g,%.3g,%.3f,%.6f\n", r.group.c_str(), r.method.c_str(),
                      r.precision.c_str(), r.workload.c_str(), r.param, r.n, r.ns, r.false_hits, r.false_misses, r.leaks,
-                     r.doubles, r.self_hits, r.missed_exits, quantile(r.t_errors, 0.5), quantile(r.t_errors, 0.999));
+                     r.doubles, r.self_hits, r.missed_exits, quantile(r.t_errors, 0.5), quantile(r.t_errors, 0.999), r.ns_batch,
+                     r.batch_agreement);
     std::fclose(f);
 
     // One point per method × precision × group: error rate over the whole group.
-    struct Agg { double ns = 0; long n = 0, errors = 0; std::vector<double> t; };
+    struct Agg { double ns = 0, ns_batch = 0, agreement = 0; long n = 0, errors = 0; std::vector<double> t; };
     std::map<std::string, Agg> agg;
     for (const auto& r : rows) {
         auto& a = agg[r.group + "," + r.method + "," + r.precision];
-        a.ns = r.ns, a.n += r.n, a.errors += r.errors();
+        a.ns = r.ns, a.ns_batch = r.ns_batch, a.agreement = r.batch_agreement, a.n += r.n, a.errors += r.errors();
         a.t.insert(a.t.end(), r.t_errors.begin(), r.t_errors.end());
     }
     FILE* p = std::fopen(points.c_str(), "w");
     if (!p) { std::perror(points.c_str()); return 1; }
-    std::fprintf(p, "group,method,precision,ns_per_test,n,errors,error_rate,t_err_p999\n");
-    std::printf("%-8s %-21s %-6s %8s %8s %9s %11s\n", "group", "method", "type", "ns/test", "tests", "errors", "t err p99.9");
+    std::fprintf(p, "group,method,precision,ns_per_test,n,errors,error_rate,t_err_p999,ns_per_test_batch,batch_agreement\n");
+    std::printf("%-8s %-21s %-6s %8s %8s %8s %9s %11s\n", "group", "method", "type", "ns/test", "batch ns", "tests", "errors", "t err p99.9");
     for (const auto& [key, a] : agg) {
-        std::fprintf(p, "%s,%.3f,%ld,%ld,%.6g,%.3g\n", key.c_str(), a.ns, a.n, a.errors, double(a.errors) / double(a.n), quantile(a.t, 0.999));
+        std::fprintf(p, "%s,%.3f,%ld,%ld,%.6g,%.3g,%.3f,%.6f\n", key.c_str(), a.ns, a.n, a.errors, double(a.errors) / double(a.n),
+                     quantile(a.t, 0.999), a.ns_batch, a.agreement);
         std::string k = key;
         for (auto& ch : k) if (ch == ',') ch = ' ';
         char g[32], m[32], t[16];
         std::sscanf(k.c_str(), "%31s %31s %15s", g, m, t);
-        std::printf("%-8s %-21s %-6s %8.2f %8ld %9ld %11.2g\n", g, m, t, a.ns, a.n, a.errors, quantile(a.t, 0.999));
+        std::printf("%-8s %-21s %-6s %8.2f %8.2f %8ld %9ld %11.2g\n", g, m, t, a.ns, a.ns_batch, a.n, a.errors, quantile(a.t, 0.999));
     }
     std::fclose(p);
     return 0;
