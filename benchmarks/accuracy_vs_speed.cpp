@@ -210,14 +210,8 @@ void sphere_method(std::vector<Row>& rows, int repeats) {
             mine.push_back(row);
         }
     // Timing: one ray against 64 spheres (about half hit), median of `repeats`.
-    workloads::Rng rng(12);
-    std::vector<isin::Sphere<T>> list;
-    for (int i = 0; i < 64; ++i)
-        list.push_back({workloads::point<T>(workloads::uniform(rng, -1, 1), workloads::uniform(rng, -1, 1), workloads::uniform(rng, 4, 6)),
-                        T(workloads::uniform(rng, 0.2, 0.6))});
-    std::vector<isin::Ray<T>> rays;
-    for (int i = 0; i < 2048; ++i)
-        rays.push_back({{0, 0, 0}, isin::normalize(workloads::point<T>(workloads::uniform(rng, -0.25, 0.25), workloads::uniform(rng, -0.25, 0.25), 1))});
+    const auto list = workloads::timing_spheres<T>();
+    const auto rays = workloads::timing_rays<T>();
     std::vector<double> ns;
     double checksum = 0;
     for (int rep = 0; rep < repeats; ++rep) {

@@ -12,6 +12,8 @@
 //   random_soup(n)       n small triangles scattered through the view, z ∈ [25, 65]
 #include <isin/isin.hpp>
 
+#include "workloads.hpp"
+
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -41,42 +43,11 @@ isin::Triangle<T> oriented(const V3& a, const V3& b, const V3& c, const V3& outs
     return flip ? isin::Triangle<T>{to<T>(a), to<T>(c), to<T>(b)} : isin::Triangle<T>{to<T>(a), to<T>(b), to<T>(c)};
 }
 
-/// Icosahedron subdivided `level` times (each triangle into four, new vertices pushed onto the
-/// sphere): 20·4^level triangles. Midpoints are computed from an edge's two end points in a
-/// symmetric way (a + b = b + a exactly), so both triangles sharing an edge get the same vertex.
+/// Icosahedron subdivided `level` times: 20·4^level triangles, closed, faces outwards
+/// (workloads::icosphere, shared with the accuracy study and the tests).
 template <class T>
 std::vector<isin::Triangle<T>> icosphere(int level, V3 centre = {0, 0, 40}, double radius = 15) {
-    const double g = (1 + std::sqrt(5.0)) / 2;
-    const V3 v[12] = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g},  {0, 1, g},
-                      {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1},  {-g, 0, -1}, {-g, 0, 1}};
-    const int f[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                          {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                          {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                          {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-    struct Tri { V3 a, b, c; };
-    std::vector<Tri> tris;
-    for (const auto& face : f) {
-        V3 a = isin::normalize(v[face[0]]), b = isin::normalize(v[face[1]]), c = isin::normalize(v[face[2]]);
-        if (isin::dot(isin::cross(b - a, c - a), a + b + c) < 0.0) std::swap(b, c); // outwards
-        tris.push_back({a, b, c});
-    }
-    for (int l = 0; l < level; ++l) { // children keep the parent's winding
-        std::vector<Tri> next;
-        next.reserve(tris.size() * 4);
-        for (const Tri& t : tris) {
-            const V3 ab = isin::normalize(t.a + t.b), bc = isin::normalize(t.b + t.c), ca = isin::normalize(t.c + t.a);
-            next.push_back({t.a, ab, ca});
-            next.push_back({ab, t.b, bc});
-            next.push_back({ca, bc, t.c});
-            next.push_back({ab, bc, ca});
-        }
-        tris.swap(next);
-    }
-    std::vector<isin::Triangle<T>> out;
-    out.reserve(tris.size());
-    for (const Tri& t : tris)
-        out.push_back({to<T>(centre + radius * t.a), to<T>(centre + radius * t.b), to<T>(centre + radius * t.c)});
-    return out;
+    return workloads::icosphere<T>(centre, radius, level);
 }
 
 /// A tube of radius 0.45 (before scaling) swept along the trefoil knot

@@ -38,7 +38,7 @@
 #include "meshes.hpp"
 
 #if ISIN_HAVE_EMBREE
-#include <embree3/rtcore.h>
+#include "embree_scene.hpp"
 #endif
 
 namespace {
@@ -95,35 +95,7 @@ double mrays(const isin::Camera<float>& camera, int stride, int repeats, F&& nea
     return median(rate);
 }
 
-#if ISIN_HAVE_EMBREE
-void embree_error(void*, RTCError code, const char* message) {
-    std::fprintf(stderr, "Embree error %d: %s\n", int(code), message ? message : "");
-    std::exit(3);
-}
 
-RTCScene new_scene(RTCDevice device, const std::vector<Tri>& tris) {
-    RTCScene scene = rtcNewScene(device);
-    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
-    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    const std::size_t n = tris.size();
-    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                                 3 * sizeof(float), 3 * n));
-    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                   3 * sizeof(unsigned), n));
-    for (std::size_t k = 0; k < n; ++k) {
-        const isin::Vertex<float>* v[3] = {&tris[k].v0, &tris[k].v1, &tris[k].v2};
-        for (std::size_t i = 0; i < 3; ++i) {
-            vertices[9 * k + 3 * i] = v[i]->x, vertices[9 * k + 3 * i + 1] = v[i]->y, vertices[9 * k + 3 * i + 2] = v[i]->z;
-            indices[3 * k + i] = unsigned(3 * k + i);
-        }
-    }
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometry(scene, geometry);
-    rtcReleaseGeometry(geometry);
-    rtcCommitScene(scene);
-    return scene;
-}
-#endif
 
 } // namespace
 
@@ -160,7 +132,7 @@ int main(int argc, char** argv) {
     const char* methods[] = {"watertight", "batch", "bvh", "embree"};
 #if ISIN_HAVE_EMBREE
     RTCDevice device = rtcNewDevice(nullptr);
-    rtcSetDeviceErrorFunction(device, embree_error, nullptr);
+    rtcSetDeviceErrorFunction(device, embree_scene::on_error, nullptr);
     const bool have_embree = true;
 #else
     const bool have_embree = false;
@@ -218,7 +190,7 @@ int main(int argc, char** argv) {
             compare("batch", tot, ref);
         }
 #if ISIN_HAVE_EMBREE
-        RTCScene scene = new_scene(device, c.tris);
+        RTCScene scene = embree_scene::make(device, c.tris);
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
         row.m[3] = mrays(camera, 1, repeats, [&](const isin::Ray<float>& ray, float& t) {

@@ -26,6 +26,8 @@
 // Run: build/…/benchmarks/vs_embree [--mesh NAME] [--repeats N] [--threads-list 1,2]
 //      [--width W --height H] [--csv FILE]            (built with -march=native)
 #include <embree3/rtcore.h>
+
+#include "embree_scene.hpp"
 #include <pmmintrin.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -94,11 +96,6 @@ double relative(double a, double b) { return std::fabs(a - b) / std::max({std::f
 
 // ---- Embree ------------------------------------------------------------------------------------
 
-void embree_error(void*, RTCError code, const char* message) {
-    std::fprintf(stderr, "Embree error %d: %s\n", int(code), message ? message : "");
-    std::exit(3);
-}
-
 RTCDevice new_device(int threads) {
     const std::string config = threads > 0 ? "threads=" + std::to_string(threads) : std::string();
     RTCDevice device = rtcNewDevice(config.c_str());
@@ -106,34 +103,8 @@ RTCDevice new_device(int threads) {
         std::fprintf(stderr, "rtcNewDevice(\"%s\") failed\n", config.c_str());
         std::exit(3);
     }
-    rtcSetDeviceErrorFunction(device, embree_error, nullptr);
+    rtcSetDeviceErrorFunction(device, embree_scene::on_error, nullptr);
     return device;
-}
-
-// One triangle geometry; vertex i of triangle k is vertex 3k + i (the triangles are a soup to
-// Embree as to isin). Everything from the triangle vector to the committed scene is timed.
-RTCScene new_scene(RTCDevice device, const std::vector<Tri>& tris) {
-    RTCScene scene = rtcNewScene(device);
-    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
-    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_MEDIUM);
-    const std::size_t n = tris.size();
-    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                                 3 * sizeof(float), 3 * n));
-    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                   3 * sizeof(unsigned), n));
-    for (std::size_t k = 0; k < n; ++k) {
-        const isin::Vertex<float>* v[3] = {&tris[k].v0, &tris[k].v1, &tris[k].v2};
-        for (std::size_t i = 0; i < 3; ++i) {
-            vertices[9 * k + 3 * i] = v[i]->x, vertices[9 * k + 3 * i + 1] = v[i]->y, vertices[9 * k + 3 * i + 2] = v[i]->z;
-            indices[3 * k + i] = unsigned(3 * k + i);
-        }
-    }
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometry(scene, geometry);
-    rtcReleaseGeometry(geometry);
-    rtcCommitScene(scene);
-    return scene;
 }
 
 // ---- the frame: bands of 4 rows over threads -----------------------------------------------------
@@ -310,7 +281,7 @@ int build_only(const Options& opt) {
         }
         c0 = cpu_seconds();
         t0 = Clock::now();
-        RTCScene scene = new_scene(device, tris);
+        RTCScene scene = embree_scene::make(device, tris);
         const double s = since(t0), c = cpu_seconds() - c0;
         if (rep >= 0) embree_ms.push_back(1e3 * s), embree_cpu.push_back(c / s);
         rtcReleaseScene(scene);
@@ -398,7 +369,7 @@ int run(const Options& opt) {
         for (int threads : opt.threads) builds.push_back(child_build(opt, name, threads));
         t0 = Clock::now();
         const isin::Bvh<float> bvh{tris};
-        RTCScene scene = new_scene(device, tris);
+        RTCScene scene = embree_scene::make(device, tris);
         const Bench bench(opt, bvh, scene, tris);
         const double setup_s = since(t0);
 

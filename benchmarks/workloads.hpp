@@ -273,4 +273,23 @@ std::vector<SphereCase<T>> sphere_restarts(double r, double offset, int n, std::
     return cases;
 }
 
+// Timing workload for spheres: 64 spheres in front of the eye and 2048 rays from the origin
+// (about half hit), the same for the one-at-a-time and the batch figures.
+template <class T>
+std::vector<isin::Sphere<T>> timing_spheres(std::uint64_t seed = 12) {
+    Rng rng(seed);
+    std::vector<isin::Sphere<T>> list;
+    for (int i = 0; i < 64; ++i)
+        list.push_back({point<T>(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, 4, 6)), T(uniform(rng, 0.2, 0.6))});
+    return list;
+}
+template <class T>
+std::vector<isin::Ray<T>> timing_rays(std::uint64_t seed = 13) {
+    Rng rng(seed);
+    std::vector<isin::Ray<T>> rays;
+    for (int i = 0; i < 2048; ++i)
+        rays.push_back({{0, 0, 0}, isin::normalize(point<T>(uniform(rng, -0.25, 0.25), uniform(rng, -0.25, 0.25), 1))});
+    return rays;
+}
+
 } // namespace workloads

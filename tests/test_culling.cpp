@@ -6,6 +6,7 @@
 #include <doctest/doctest.h>
 
 #include "approx.hpp"
+#include "../benchmarks/workloads.hpp"
 
 #include <array>
 #include <cmath>
@@ -17,38 +18,6 @@ template <class T>
 const isin::Triangle<T> first_11a{{0, 0, 40}, {40, 0, -40}, {-40, 0, -40}};
 template <class T>
 const isin::Triangle<T> reordered_11a{{40, 0, -40}, {0, 0, 40}, {-40, 0, -40}};
-
-// A closed icosphere of radius r around c, subdivided `levels` times, every face clockwise seen
-// from outside (its normal points outwards).
-template <class T>
-std::vector<isin::Triangle<T>> icosphere(isin::Vertex<T> c, T r, int levels) {
-    const T p = T(1.6180339887498949);
-    std::vector<isin::Vertex<T>> v{{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0},
-                                   {0, -1, p}, {0, 1, p}, {0, -1, -p}, {0, 1, -p},
-                                   {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
-    const int f[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                          {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                          {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                          {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-    std::vector<isin::Triangle<T>> tris;
-    for (const auto& face : f)
-        tris.push_back({isin::normalize(v[size_t(face[0])]), isin::normalize(v[size_t(face[1])]),
-                        isin::normalize(v[size_t(face[2])])});
-    for (int l = 0; l < levels; ++l) {
-        std::vector<isin::Triangle<T>> finer;
-        for (const auto& t : tris) {
-            const auto a = isin::normalize(t.v0 + t.v1), b = isin::normalize(t.v1 + t.v2),
-                       d = isin::normalize(t.v2 + t.v0);
-            finer.insert(finer.end(), {{t.v0, a, d}, {a, t.v1, b}, {d, b, t.v2}, {a, b, d}});
-        }
-        tris.swap(finer);
-    }
-    for (auto& t : tris) {
-        if (isin::dot(isin::normal(t), t.v0) < T(0)) std::swap(t.v1, t.v2); // outward = front
-        t = {c + r * t.v0, c + r * t.v1, c + r * t.v2};
-    }
-    return tris;
-}
 
 } // namespace
 
@@ -95,7 +64,7 @@ TEST_CASE_TEMPLATE("§11 method 2 at eye (0,60,80) looking at the origin agrees 
 TEST_CASE_TEMPLATE("§11 both methods agree on every triangle of a closed mesh from many eyes", T,
                    float, double) {
     const isin::Vertex<T> centre{3, -2, 50};
-    const auto mesh = icosphere<T>(centre, T(10), 2); // 320 triangles
+    const auto mesh = workloads::icosphere<T>({3, -2, 50}, 10.0, 2); // 320 triangles, closed
     REQUIRE(mesh.size() == 320);
     const isin::Vertex<T> eyes[] = {{0, 0, 0}, {0, 60, 80}, {40, -30, 10}, {-25, 5, 95},
                                     {3, 40, 50}, {60, 0, 50}, {3, -2, 20}, {-30, -30, 140}};

@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include "approx.hpp"
+#include "temp_dir.hpp"
 
 #include <algorithm>
 #include <cstdlib>
@@ -28,25 +29,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// A fresh, empty directory under the system temp directory, removed with its contents.
-struct TempDir {
-    fs::path path;
-    TempDir() {
-        static int n = 0;
-        const auto stamp = std::to_string(isin::detail::process_id()) + "-" + std::to_string(n++);
-        path = fs::temp_directory_path() / ("isin-test-image-" + stamp);
-        fs::remove_all(path);
-        fs::create_directories(path);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    ~TempDir() {
-        std::error_code ec;
-        fs::permissions(path, fs::perms::owner_all, fs::perm_options::add, ec);
-        fs::remove_all(path, ec);
-    }
-    [[nodiscard]] std::string operator/(const std::string& name) const { return (path / name).string(); }
-};
 
 /// Names in `dir`, sorted.
 std::vector<std::string> listing(const fs::path& dir) {
@@ -123,7 +105,7 @@ TEST_CASE("Image: fill colour, row-major layout from the top, checked and unchec
 }
 
 TEST_CASE("write_ppm: binary P6 header, then RGB bytes row by row from the top") {
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     isin::Image image(2, 2);
     image(0, 0) = {255, 0, 0};
     image(1, 0) = {0, 255, 0};
@@ -143,7 +125,7 @@ TEST_CASE("write_ppm: binary P6 header, then RGB bytes row by row from the top")
 }
 
 TEST_CASE("read_image: PPM with comments and maxval 15 or 65535 is scaled to 0â€¦255") {
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     put_file(dir / "c.ppm", std::string("P6 # comment\n# more\n2 1\n15\n") + '\x0f' + '\x00' + '\x05' +
                                 '\x07' + '\x0f' + '\x00');
     const isin::Image a = isin::read_image(dir / "c.ppm");
@@ -158,7 +140,7 @@ TEST_CASE("read_image: PPM with comments and maxval 15 or 65535 is scaled to 0â€
 }
 
 TEST_CASE("write_png then read_image gives the identical pixels") {
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     const isin::Image image = gradient(7, 5);
 #if ISIN_HAVE_STB
     isin::write_png(image, dir / "g.png");
@@ -225,7 +207,7 @@ const unsigned char flat_jpeg[] = {
 // clang-format on
 
 TEST_CASE("read_image: a JPEG decodes to RGB (a flat colour survives the lossy coding)") {
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     put_file(dir / "f.jpg", std::string(std::begin(flat_jpeg), std::end(flat_jpeg)));
     const isin::Image back = isin::read_image(dir / "f.jpg");
     REQUIRE(back.width() == 8);
@@ -239,7 +221,7 @@ TEST_CASE("read_image: a JPEG decodes to RGB (a flat colour survives the lossy c
 #endif
 
 TEST_CASE("write_image: format by extension in any case; other extensions throw invalid_argument") {
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     const isin::Image image = gradient(3, 3);
     isin::write_image(image, dir / "x.PpM");
     CHECK(file_bytes(dir / "x.PpM").at(1) == '6');
@@ -258,7 +240,7 @@ TEST_CASE("write_image: format by extension in any case; other extensions throw 
 }
 
 TEST_CASE("writing into a missing directory throws runtime_error naming the path, leaves nothing") {
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     const isin::Image image = gradient(2, 2);
     const std::string target = dir / "missing/out.ppm";
     CHECK(contains(thrown<std::runtime_error>([&] { isin::write_ppm(image, target); }), target));
@@ -267,7 +249,7 @@ TEST_CASE("writing into a missing directory throws runtime_error naming the path
 }
 
 TEST_CASE("writing onto an existing directory throws runtime_error, removes its temporary") {
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     fs::create_directory(dir.path / "sub");
     const isin::Image image = gradient(2, 2);
     CHECK(contains(thrown<std::runtime_error>([&] { isin::write_ppm(image, dir / "sub"); }), dir / "sub"));
@@ -280,7 +262,7 @@ TEST_CASE("writing onto an existing directory throws runtime_error, removes its 
 }
 
 TEST_CASE("overwriting a good file replaces it whole; no temporary stays behind") {
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     isin::write_ppm(gradient(4, 4), dir / "o.ppm");
     const isin::Image second(3, 2, {7, 7, 7});
     isin::write_ppm(second, dir / "o.ppm");
@@ -290,7 +272,7 @@ TEST_CASE("overwriting a good file replaces it whole; no temporary stays behind"
 
 #if ISIN_TEST_POSIX
 TEST_CASE("a write failing midway (file size limit) leaves the old file untouched, no temporary") {
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     const std::string target = dir / "good.ppm";
     isin::write_ppm(gradient(4, 4), target);
     const auto before = file_bytes(target);
@@ -321,7 +303,7 @@ TEST_CASE("writing into a read-only directory throws runtime_error and leaves no
         MESSAGE("skipped: running as root, permissions do not stop writes");
         return;
     }
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     fs::create_directory(dir.path / "ro");
     fs::permissions(dir.path / "ro", fs::perms::owner_read | fs::perms::owner_exec);
     CHECK_THROWS_AS(isin::write_ppm(gradient(2, 2), dir / "ro/out.ppm"), std::runtime_error);
@@ -331,7 +313,7 @@ TEST_CASE("writing into a read-only directory throws runtime_error and leaves no
 #endif
 
 TEST_CASE("read_image: missing, garbage, truncated or directory paths throw naming the path") {
-    TempDir dir;
+    TempDir dir{"isin-test-image-"};
     const std::string missing = dir / "nothing.png";
     CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(missing); }), missing));
 

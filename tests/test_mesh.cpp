@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 
 #include "approx.hpp"
+#include "temp_dir.hpp"
 
 #include <chrono>
 #include <cstdint>
@@ -21,33 +22,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// A fresh, empty directory under the system temp directory, removed with its contents.
-struct TempDir {
-    fs::path path;
-    TempDir() {
-        static int n = 0;
-        std::random_device random;
-        const auto stamp = std::to_string(random()) + "-" +
-                           std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()) + "-" +
-                           std::to_string(n++);
-        path = fs::temp_directory_path() / ("isin-test-mesh-" + stamp);
-        fs::remove_all(path);
-        fs::create_directories(path);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-    /// Writes `content` to the file `name` in this directory; returns its path.
-    std::string put(const std::string& name, const std::string& content) const {
-        const std::string file = (path / name).string();
-        std::ofstream out(file, std::ios::binary);
-        out << content;
-        return file;
-    }
-};
 
 /// The what() of the E thrown by f, or "" (and a failed check) if none was thrown.
 template <class E = isin::MeshError, class F>
@@ -160,7 +134,7 @@ std::string header(std::initializer_list<const char*> lines) {
 #if ISIN_HAVE_TINYOBJLOADER
 TEST_CASE_TEMPLATE("OBJ: quad, triangle, pentagon become fans (v0, vi, vi+1) with exact coordinates", T,
                    float, double) {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const auto tris = isin::load_obj<T>(dir.put("polygons.obj", polygons_obj));
     REQUIRE(tris.size() == 2 + 1 + 3 + 1);
     check_triangle(tris[0], V<T>(0, 0, 0), V<T>(2, 0, 0), V<T>(2, 2, 0));
@@ -182,7 +156,7 @@ TEST_CASE_TEMPLATE("OBJ: quad, triangle, pentagon become fans (v0, vi, vi+1) wit
 }
 
 TEST_CASE_TEMPLATE("OBJ: negative indices, v/vt/vn forms, groups, usemtl and a missing .mtl", T, float, double) {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const std::string obj = "mtllib missing.mtl\n"
                             "v 0 0 0\n"
                             "v 1 0 0\n"
@@ -211,7 +185,7 @@ TEST_CASE_TEMPLATE("OBJ: negative indices, v/vt/vn forms, groups, usemtl and a m
 }
 
 TEST_CASE("OBJ: a face may name vertices defined later in the file; CRLF line ends work") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const auto tris = isin::load_obj<double>(dir.put("forward.obj", "f 1 2 3\r\nv 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\n"));
     REQUIRE(tris.size() == 1);
     check_triangle(tris[0], V<double>(0, 0, 0), V<double>(1, 0, 0), V<double>(0, 1, 0));
@@ -219,7 +193,7 @@ TEST_CASE("OBJ: a face may name vertices defined later in the file; CRLF line en
 
 #else
 TEST_CASE("OBJ without tinyobjloader: load_obj and load_mesh throw runtime_error saying what to install") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const std::string obj = dir.put("a.obj", polygons_obj);
     CHECK_THROWS_WITH_AS((void)isin::load_obj<float>(obj), doctest::Contains("libtinyobjloader-dev"),
                          std::runtime_error);
@@ -228,7 +202,7 @@ TEST_CASE("OBJ without tinyobjloader: load_obj and load_mesh throw runtime_error
 #endif
 
 TEST_CASE("OBJ and PLY without faces give an empty mesh, not an error") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
 #if ISIN_HAVE_TINYOBJLOADER
     CHECK(isin::load_obj<float>(dir.put("empty.obj", "")).empty());
     CHECK(isin::load_obj<float>(dir.put("points.obj", "# only vertices\nv 0 0 0\nv 1 1 1\n")).empty());
@@ -243,7 +217,7 @@ TEST_CASE("OBJ and PLY without faces give an empty mesh, not an error") {
 
 TEST_CASE_TEMPLATE("PLY ascii: extra vertex properties and elements are skipped, quads become fans", T, float,
                    double) {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const auto tris = isin::load_ply<T>(dir.put("mesh.ply", ascii_ply));
     REQUIRE(tris.size() == 3);
     check_triangle(tris[0], V<T>(0, 0, 0), V<T>(2, 0, 0), V<T>(2, 2, 0));
@@ -259,7 +233,7 @@ TEST_CASE_TEMPLATE("PLY binary little-endian: float/int32/uint8 data, lists skip
         MESSAGE("skipped: the test writes the binary body in the host's byte order");
         return;
     }
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     std::string file = header({"ply", "format binary_little_endian 1.0", "comment a camera first, to skip",
                                "element camera 1", "property double fov", "property list uchar short ids",
                                "element vertex 5", "property float x", "property float y", "property float z",
@@ -295,7 +269,7 @@ TEST_CASE_TEMPLATE("PLY binary little-endian: float/int32/uint8 data, lists skip
 
 TEST_CASE_TEMPLATE("PLY binary: double and int16 coordinates, uint indices, a 200-gon", T, float, double) {
     if (!host_is_little_endian()) return;
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     std::string file = header({"ply", "format binary_little_endian 1.0", "element vertex 200",
                                "property double z", "property int16 x", "property float64 y",
                                "element face 1", "property list ushort uint vertex_index"});
@@ -310,7 +284,7 @@ TEST_CASE_TEMPLATE("PLY binary: double and int16 coordinates, uint indices, a 20
 }
 
 TEST_CASE("load_mesh: chooses the reader by extension, in any letter case") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
 #if ISIN_HAVE_TINYOBJLOADER
     CHECK(isin::load_mesh<float>(dir.put("a.obj", polygons_obj)).size() == 7);
     CHECK(isin::load_mesh<double>(dir.put("B.OBJ", polygons_obj)).size() == 7);
@@ -326,7 +300,7 @@ TEST_CASE("load_mesh: chooses the reader by extension, in any letter case") {
 }
 
 TEST_CASE("missing or unreadable files throw MeshError naming the path") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const std::string ply = (dir.path / "nothing.ply").string();
     const std::string a = thrown([&] { (void)isin::load_mesh<float>(ply); });
     CHECK(str(a) == doctest::Contains(str(ply)));
@@ -344,7 +318,7 @@ TEST_CASE("missing or unreadable files throw MeshError naming the path") {
 
 #if ISIN_HAVE_TINYOBJLOADER
 TEST_CASE("OBJ: an index out of range names the file and the face's line") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const std::string base = "v 0 0 0\nv 1 0 0\n# a comment\nv 0 1 0\n";
     const std::string too_big = dir.put("big.obj", base + "f 1 2 3\nf 1 2 4\n");
     std::string why = thrown([&] { (void)isin::load_obj<float>(too_big); });
@@ -380,7 +354,7 @@ TEST_CASE("OBJ: an index out of range names the file and the face's line") {
 }
 
 TEST_CASE("OBJ: faces with fewer than 3 vertices and malformed references throw with the line") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const std::string base = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
     std::string why = thrown([&] { (void)isin::load_obj<float>(dir.put("two.obj", base + "f 1 2\n")); });
     CHECK(str(why) == doctest::Contains("line 4"));
@@ -396,7 +370,7 @@ TEST_CASE("OBJ: faces with fewer than 3 vertices and malformed references throw 
 }
 
 TEST_CASE("OBJ: NaN, infinite, malformed or out-of-range coordinates throw with the line") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const auto why = [&](const std::string& name, const std::string& text) {
         return str(thrown([&] { (void)isin::load_obj<float>(dir.put(name, text)); }));
     };
@@ -413,7 +387,7 @@ TEST_CASE("OBJ: NaN, infinite, malformed or out-of-range coordinates throw with 
 }
 
 TEST_CASE_TEMPLATE("OBJ: numbers tinyobjloader's arithmetic gets wrong are reread by isin", T, float, double) {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     // tinyobjloader computes 0·5^500 = 0·inf = NaN for "0e500"; the text is a plain zero.
     const auto tris = isin::load_obj<T>(dir.put("zero.obj", "v 0e500 1 2\nv 1 0 0\nv -0.0e+999 1 0\nf 1 2 3\n"));
     REQUIRE(tris.size() == 1);
@@ -423,7 +397,7 @@ TEST_CASE_TEMPLATE("OBJ: numbers tinyobjloader's arithmetic gets wrong are rerea
 #endif
 
 TEST_CASE("OBJ and PLY: 1e300 does not fit a float (line named) but loads as a double") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
 #if ISIN_HAVE_TINYOBJLOADER
     const std::string obj = dir.put("big.obj", "v 0 0 0\nv 1 0 0\nv 1e300 1 0\nf 1 2 3\n");
     const std::string why = thrown([&] { (void)isin::load_obj<float>(obj); });
@@ -457,7 +431,7 @@ TEST_CASE("OBJ and PLY: 1e300 does not fit a float (line named) but loads as a d
 }
 
 TEST_CASE("PLY: a huge count in the header with little data throws at once, allocating nothing big") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const auto begin = std::chrono::steady_clock::now();
     const std::string ascii = dir.put("huge.ply", header({"ply", "format ascii 1.0", "element vertex 4000000000",
                                                           "property float x", "property float y",
@@ -493,7 +467,7 @@ TEST_CASE("PLY: a huge count in the header with little data throws at once, allo
 }
 
 TEST_CASE("PLY: an index out of range names the line (ASCII) or byte offset (binary)") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const std::string h = header({"ply", "format ascii 1.0", "element vertex 4", "property float x",
                                   "property float y", "property float z", "element face 2",
                                   "property list uchar int vertex_indices"});
@@ -520,7 +494,7 @@ TEST_CASE("PLY: an index out of range names the line (ASCII) or byte offset (bin
 }
 
 TEST_CASE("PLY: truncated data throws 'truncated at offset N' (binary) or at a line (ASCII)") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const std::string hb = header({"ply", "format binary_little_endian 1.0", "element vertex 3",
                                    "property float x", "property float y", "property float z", "element face 1",
                                    "property list uchar int vertex_indices"});
@@ -545,7 +519,7 @@ TEST_CASE("PLY: truncated data throws 'truncated at offset N' (binary) or at a l
 }
 
 TEST_CASE("PLY: bad headers and unsupported formats throw with the line") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const auto why = [&](const std::string& name, const std::string& text) {
         return str(thrown([&] { (void)isin::load_ply<float>(dir.put(name, text)); }));
     };
@@ -574,7 +548,7 @@ TEST_CASE("PLY: bad headers and unsupported formats throw with the line") {
 }
 
 TEST_CASE("PLY: NaN coordinates, short faces and malformed numbers throw with their position") {
-    TempDir dir;
+    TempDir dir{"isin-test-mesh-"};
     const std::string ha = header({"ply", "format ascii 1.0", "element vertex 3", "property float x",
                                    "property float y", "property float z", "element face 1",
                                    "property list uchar int vertex_indices"});
