@@ -374,6 +374,9 @@ private:
     // ---- traversal ---------------------------------------------------------------------
     struct RayData {
         T org[3], inv[3], org_inv[3];
+        // o·inv lowered / raised by 4ε|o·inv|, the most its rounding (and inv's) can move a slab
+        // distance computed as p·inv − o·inv: entries use the lowered, exits the raised value.
+        T org_inv_near[3], org_inv_far[3];
         Vertex<T> dir;
         int near_is_lo[3];
         // watertight shear (WBW §3)
@@ -394,6 +397,9 @@ private:
             r.org[a] = component(ray.origin, a);
             r.inv[a] = T(1) / da;
             r.org_inv[a] = r.org[a] * r.inv[a];
+            const T allowance = T(4) * std::numeric_limits<T>::epsilon() * std::fabs(r.org_inv[a]);
+            r.org_inv_near[a] = r.org_inv[a] + allowance;
+            r.org_inv_far[a] = r.org_inv[a] - allowance;
             r.near_is_lo[a] = r.inv[a] >= T(0);
         }
         const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
@@ -417,11 +423,19 @@ private:
             __m256 tn = _mm256_setzero_ps(), tf = _mm256_set1_ps(float(t_far));
             const __m256 w = _mm256_set1_ps(float(widen));
             for (int a = 0; a < 3; ++a) {
-                const __m256 org = _mm256_set1_ps(float(r.org[a])), inv = _mm256_set1_ps(float(r.inv[a]));
+                const __m256 inv = _mm256_set1_ps(float(r.inv[a]));
                 const float* near_plane = r.near_is_lo[a] ? n.lo[a] : n.hi[a];
                 const float* far_plane = r.near_is_lo[a] ? n.hi[a] : n.lo[a];
+#if defined(__FMA__)
+                // p·inv − o·inv in one FMA; o·inv is rounded, so the entry subtracts and the exit
+                // adds the per-ray allowance (prepare: org_inv_near / org_inv_far).
+                const __m256 t0 = _mm256_fmsub_ps(_mm256_load_ps(near_plane), inv, _mm256_set1_ps(float(r.org_inv_near[a])));
+                const __m256 t1 = _mm256_mul_ps(_mm256_fmsub_ps(_mm256_load_ps(far_plane), inv, _mm256_set1_ps(float(r.org_inv_far[a]))), w);
+#else
+                const __m256 org = _mm256_set1_ps(float(r.org[a]));
                 const __m256 t0 = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(near_plane), org), inv);
                 const __m256 t1 = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(far_plane), org), inv), w);
+#endif
                 tn = _mm256_max_ps(tn, t0);
                 tf = _mm256_min_ps(tf, t1);
             }
