@@ -4,6 +4,7 @@
 /// -march=native). Same formula as `intersect_moller_trumbore` (note §10), with the division
 /// taken for every lane instead of on the hit path only.
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <limits>
 #include <vector>
@@ -115,7 +116,7 @@ private:
     }
 
     [[nodiscard]] static std::size_t padded(std::size_t n) noexcept { return (n + block - 1) / block * block; }
-    std::vector<std::vector<T>*> arrays() {
+    std::array<std::vector<T>*, 9> arrays() noexcept {
         return {&v0x_, &v0y_, &v0z_, &e1x_, &e1y_, &e1z_, &e2x_, &e2y_, &e2z_};
     }
 

@@ -373,7 +373,7 @@ private:
 
     // ---- traversal ---------------------------------------------------------------------
     struct RayData {
-        T org[3], inv[3], org_inv[3];
+        T org[3], inv[3];
         // o·inv lowered / raised by 4ε|o·inv|, the most its rounding (and inv's) can move a slab
         // distance computed as p·inv − o·inv: entries use the lowered, exits the raised value.
         T org_inv_near[3], org_inv_far[3];
@@ -396,10 +396,10 @@ private:
             if (std::fabs(da) < tiny) da = std::copysign(tiny, da); // ±0 → ±tiny: no 0·∞ = NaN
             r.org[a] = component(ray.origin, a);
             r.inv[a] = T(1) / da;
-            r.org_inv[a] = r.org[a] * r.inv[a];
-            const T allowance = T(4) * std::numeric_limits<T>::epsilon() * std::fabs(r.org_inv[a]);
-            r.org_inv_near[a] = r.org_inv[a] + allowance;
-            r.org_inv_far[a] = r.org_inv[a] - allowance;
+            const T org_inv = r.org[a] * r.inv[a];
+            const T allowance = T(4) * std::numeric_limits<T>::epsilon() * std::fabs(org_inv);
+            r.org_inv_near[a] = org_inv + allowance;
+            r.org_inv_far[a] = org_inv - allowance;
             r.near_is_lo[a] = r.inv[a] >= T(0);
         }
         const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);

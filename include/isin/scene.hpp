@@ -115,7 +115,7 @@ using BatchFor = std::conditional_t<is_triangle_kind<Shape>::value, TriangleAcce
 
 /// How a scene finds hits among the triangles of one kind ("model no more than a scene needs").
 enum class Acceleration {
-    automatic, ///< by size: one by one, then TriangleBatch from batch_min, then Bvh from bvh_min
+    automatic, ///< by size: one by one, TriangleBatch from batch_min, Bvh from bvh_min once committed
     none,      ///< one triangle after another
     batch,     ///< TriangleBatch: Möller–Trumbore over structure-of-arrays, vectorised
     bvh        ///< Bvh: 8-wide bounding volume hierarchy, watertight triangle test
@@ -333,7 +333,8 @@ private:
     [[nodiscard]] bool uses(Acceleration a, std::size_t n) const noexcept {
         if (triangle_method != TriangleMethod::moller_trumbore) return false;
         if (acceleration != Acceleration::automatic) return acceleration == a;
-        return a == Acceleration::bvh ? n >= bvh_min : (n >= batch_min && n < bvh_min);
+        // Callers try the Bvh first; a kind whose Bvh is not built (yet) still gets the batch.
+        return n >= (a == Acceleration::bvh ? bvh_min : batch_min);
     }
 
     // Nearest hit in a kind's Bvh. With a culling mask, a culled nearest hit is stepped over
