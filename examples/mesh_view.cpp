@@ -11,6 +11,8 @@
 
 #include <isin/isin.hpp>
 
+#include "options.hpp"
+
 namespace {
 
 const char* usage =
@@ -20,18 +22,7 @@ const char* usage =
     "note's pinhole: a 16×9 plane at distance 10) is placed to frame the whole mesh. A mesh of\n"
     "64 triangles or more is traced through a BVH. --cull drops backfaces from primary rays.\n";
 
-[[noreturn]] void fail(const std::string& why) {
-    std::fprintf(stderr, "mesh_view: %s\n%s", why.c_str(), usage);
-    std::exit(2);
-}
-
-int number(int& i, int argc, char** argv, int lo, int hi) {
-    if (i + 1 >= argc) fail(std::string(argv[i]) + " needs a value");
-    char* end = nullptr;
-    const long v = std::strtol(argv[++i], &end, 10);
-    if (*end != '\0' || v < lo || v > hi) fail(std::string(argv[i - 1]) + ": bad value '" + argv[i] + "'");
-    return int(v);
-}
+[[noreturn]] void fail(const std::string& why) { example::fail("mesh_view", why, usage); }
 
 } // namespace
 
@@ -44,15 +35,13 @@ int main(int argc, char** argv) {
         if (a == "--help" || a == "-h") {
             std::fputs(usage, stdout);
             return 0;
-        } else if (a == "--output" || a == "-o") {
-            if (i + 1 >= argc) fail("--output needs a path");
-            output = argv[++i];
-        } else if (a == "--width") width = number(i, argc, argv, 2, 32768);
-        else if (a == "--height") height = number(i, argc, argv, 2, 32768);
-        else if (a == "--threads") opt.threads = number(i, argc, argv, 0, 1024);
-        else if (a == "--samples") opt.samples = number(i, argc, argv, 1, 16);
+        } else if (a == "--output" || a == "-o") output = example::string_option(i, argc, argv, usage);
+        else if (a == "--width") width = example::integer_option(i, argc, argv, 2, 32768, usage);
+        else if (a == "--height") height = example::integer_option(i, argc, argv, 2, 32768, usage);
+        else if (a == "--threads") opt.threads = example::integer_option(i, argc, argv, 0, 1024, usage);
+        else if (a == "--samples") opt.samples = example::integer_option(i, argc, argv, 1, 16, usage);
         else if (a == "--cull") {
-            const std::string c = i + 1 < argc ? argv[++i] : "";
+            const std::string c = example::string_option(i, argc, argv, usage);
             if (c == "none") opt.culling = isin::Culling::none;
             else if (c == "dot") opt.culling = isin::Culling::dot_product;
             else if (c == "projected") opt.culling = isin::Culling::projected;

@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "note_scene.hpp"
+#include "options.hpp"
 
 namespace {
 
@@ -203,41 +204,32 @@ int interactive(const note_scene::Scene<float>& scene, isin::RenderOptions opt) 
 
 int main(int argc, char** argv) {
     std::string script, output = "last.png", frames_dir;
+    std::string frames_value; // --frames: a count with --benchmark, a directory with --script
     bool scripted = false, benchmark = false;
     int width = 0, height = 0, frames = 60;
     isin::RenderOptions opt;
     opt.progress = false;
-    auto fail = [&](const std::string& why) {
-        std::fprintf(stderr, "walk: %s\n%s", why.c_str(), usage);
-        std::exit(2);
-    };
-    auto number = [&](int& i, int lo, int hi) {
-        if (i + 1 >= argc) fail(std::string(argv[i]) + " needs a value");
-        char* end = nullptr;
-        const long v = std::strtol(argv[++i], &end, 10);
-        if (*end != '\0' || v < lo || v > hi) fail(std::string(argv[i - 1]) + ": bad value '" + argv[i] + "'");
-        return int(v);
-    };
+    auto fail = [&](const std::string& why) { example::fail("walk", why, usage); };
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--help" || a == "-h") {
             std::fputs(usage, stdout);
             return 0;
-        } else if (a == "--script") {
-            if (i + 1 >= argc) fail("--script needs keys");
-            script = argv[++i], scripted = true;
-        } else if (a == "--output" || a == "-o") {
-            if (i + 1 >= argc) fail("--output needs a path");
-            output = argv[++i];
-        } else if (a == "--frames") {
-            if (i + 1 >= argc) fail("--frames needs a value");
-            if (benchmark || !scripted) frames = number(i, 1, 100000);
-            else frames_dir = argv[++i];
-        } else if (a == "--width") width = number(i, 2, 8192);
-        else if (a == "--height") height = number(i, 2, 8192);
-        else if (a == "--threads") opt.threads = number(i, 0, 1024);
+        } else if (a == "--script") script = example::string_option(i, argc, argv, usage), scripted = true;
+        else if (a == "--output" || a == "-o") output = example::string_option(i, argc, argv, usage);
+        else if (a == "--frames") frames_value = example::string_option(i, argc, argv, usage);
+        else if (a == "--width") width = example::integer_option(i, argc, argv, 2, 8192, usage);
+        else if (a == "--height") height = example::integer_option(i, argc, argv, 2, 8192, usage);
+        else if (a == "--threads") opt.threads = example::integer_option(i, argc, argv, 0, 1024, usage);
         else if (a == "--benchmark") benchmark = true;
         else fail("unknown option '" + a + "'");
+    }
+    if (!frames_value.empty()) { // read once every option is known, whatever their order
+        if (scripted && !benchmark) {
+            frames_dir = frames_value;
+        } else {
+            frames = example::to_integer(frames_value, "--frames", 1, 100000, "walk", usage);
+        }
     }
     const auto scene = note_scene::make<float>();
     try {
