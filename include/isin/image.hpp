@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "color.hpp"
+#include "detail/file.hpp"
 #include "detail/stb.hpp"
 
 #if defined(__unix__) || defined(__APPLE__)
@@ -96,10 +97,6 @@ private:
 };
 
 namespace detail {
-
-[[nodiscard]] inline std::string errno_text(int err) {
-    return std::error_code(err, std::generic_category()).message();
-}
 
 [[nodiscard]] inline std::runtime_error file_error(const char* who, const std::string& path,
                                                    const std::string& why) {
@@ -177,20 +174,9 @@ inline void write_file_atomically(const char* who, const std::string& path,
 
 /// The whole file at `path`; throws std::runtime_error naming `path`.
 [[nodiscard]] inline std::vector<unsigned char> read_file(const char* who, const std::string& path) {
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) throw file_error(who, path, "is a directory");
-    errno = 0;
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
-                                                         &std::fclose);
-    if (!file) throw file_error(who, path, "cannot open: " + errno_text(errno));
     std::vector<unsigned char> bytes;
-    unsigned char chunk[1 << 16];
-    for (;;) {
-        const std::size_t n = std::fread(chunk, 1, sizeof chunk, file.get());
-        bytes.insert(bytes.end(), chunk, chunk + n);
-        if (n < sizeof chunk) break;
-    }
-    if (std::ferror(file.get())) throw file_error(who, path, "cannot read: " + errno_text(errno));
+    const std::string why = read_whole_file(path, bytes);
+    if (!why.empty()) throw file_error(who, path, why);
     return bytes;
 }
 

@@ -48,6 +48,7 @@
 #include <utility>
 #include <vector>
 
+#include "detail/file.hpp"
 #include "detail/tinyobj.hpp"
 #include "triangle.hpp"
 #include "vec.hpp"
@@ -78,19 +79,9 @@ namespace detail {
 
 /// The whole file, read once; its size bounds everything the loaders allocate.
 [[nodiscard]] inline std::string mesh_read_file(const char* who, const std::string& path) {
-    const auto reason = [](int err) { return std::error_code(err, std::generic_category()).message(); };
-    errno = 0;
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
-                                                         &std::fclose);
-    if (!file) throw mesh_error(who, path, "cannot open: " + reason(errno));
     std::string bytes;
-    char chunk[1 << 16];
-    for (;;) {
-        const std::size_t n = std::fread(chunk, 1, sizeof chunk, file.get());
-        bytes.append(chunk, n);
-        if (n < sizeof chunk) break;
-    }
-    if (std::ferror(file.get())) throw mesh_error(who, path, "cannot read: " + reason(errno));
+    const std::string why = read_whole_file(path, bytes);
+    if (!why.empty()) throw mesh_error(who, path, why);
     return bytes;
 }
 
