@@ -130,9 +130,10 @@ Row judge_mesh(const char* workload, const workloads::MeshCase<T>& m) {
 // ns per test, one ray against a list of 64 triangles (in L1), median of `repeats`.
 template <template <class> class M, class T>
 double time_triangles(int repeats) {
-    const auto cases = workloads::random_pairs<T>(2048, 11);
+    const workloads::TriangleTiming<T> timing;
+    const auto& cases = timing.cases;
     std::vector<typename M<T>::Data> list;
-    for (size_t i = 0; i < 64; ++i) list.push_back(M<T>::prepare(cases[i].tri));
+    for (const auto& tri : timing.triangles) list.push_back(M<T>::prepare(tri));
     std::vector<double> ns;
     double checksum = 0;
     for (int r = 0; r < repeats; ++r) {

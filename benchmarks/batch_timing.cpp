@@ -48,9 +48,9 @@ void batch_triangle(const std::string& m, const isin::Ray<T>& r, const batch::Tr
 
 template <class T>
 BatchResult triangles(const std::string& m, int repeats) {
-    const auto cases = workloads::random_pairs<T>(2048, 11);
-    std::vector<isin::Triangle<T>> list;
-    for (size_t i = 0; i < 64; ++i) list.push_back(cases[i].tri);
+    const workloads::TriangleTiming<T> timing;
+    const auto& cases = timing.cases;
+    const auto& list = timing.triangles;
     const batch::Triangles<T> b(list);
     const batch::Transforms<T> bw(list);
     T out[64];

@@ -273,6 +273,18 @@ std::vector<SphereCase<T>> sphere_restarts(double r, double offset, int n, std::
     return cases;
 }
 
+// Timing workload for triangles: 2048 random rays (random_pairs, seed 11) each tested against
+// the same 64 triangles (the first 64 of those pairs), the same for the one-at-a-time and the
+// batch figures.
+template <class T>
+struct TriangleTiming {
+    std::vector<TriangleCase<T>> cases = random_pairs<T>(2048, 11);
+    std::vector<isin::Triangle<T>> triangles{};
+    TriangleTiming() {
+        for (std::size_t i = 0; i < 64; ++i) triangles.push_back(cases[i].tri);
+    }
+};
+
 // Timing workload for spheres: 64 spheres in front of the eye and 2048 rays from the origin
 // (about half hit), the same for the one-at-a-time and the batch figures.
 template <class T>
