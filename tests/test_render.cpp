@@ -219,6 +219,7 @@ TEST_CASE_TEMPLATE("scene: a mesh gets a BVH; hits, shadows and culling agree wi
     const auto sphere = workloads::icosphere<T>({0, 0, 40}, 10.0, 3); // 1280 triangles, closed
     isin::Scene<T, isin::Triangle> scene;
     scene.add_mesh(sphere, scene.add_material({}));
+    REQUIRE(scene.template has_bvh<isin::Triangle<T>>()); // 1280 ≥ bvh_min
     scene.add_light({{0, 100, 0}});
     const isin::Camera<T> cam{64, 36};
     int differ = 0, hits = 0, shadow_differ = 0;
@@ -249,4 +250,9 @@ TEST_CASE_TEMPLATE("scene: a mesh gets a BVH; hits, shadows and culling agree wi
     const auto plain = isin::render(scene, cam, opt);
     opt.culling = isin::Culling::dot_product;
     CHECK(isin::render(scene, cam, opt).pixels() == plain.pixels());
+    // Adding a triangle makes the Bvh stale: it is dropped until the next commit.
+    scene.add(sphere[0], 0);
+    CHECK_FALSE(scene.template has_bvh<isin::Triangle<T>>());
+    scene.commit();
+    CHECK(scene.template has_bvh<isin::Triangle<T>>());
 }

@@ -243,6 +243,12 @@ public:
     [[nodiscard]] const std::vector<Object<Shape>>& objects() const noexcept {
         return std::get<std::vector<Object<Shape>>>(objects_);
     }
+    /// Whether the triangle kind Shape currently has a Bvh (built by commit() or add_mesh).
+    template <class Shape>
+    [[nodiscard]] bool has_bvh() const noexcept {
+        static_assert(is_triangle_kind<Shape>::value, "only triangle kinds get a Bvh");
+        return bool(std::get<index_of<Shape>()>(batches_).bvh);
+    }
     /// Number of objects of all kinds.
     [[nodiscard]] std::size_t size() const noexcept {
         return std::apply([](const auto&... v) { return (std::size_t(0) + ... + v.size()); }, objects_);
