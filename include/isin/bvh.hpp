@@ -1,6 +1,7 @@
 #pragma once
 /// isin — a bounding volume hierarchy over triangles: binned SAH build (multi-threaded where it
-/// pays), collapsed to 8-wide nodes, ordered front-to-back traversal with an 8-lane slab test,
+/// pays), collapsed to 8-wide nodes for the least SAH cost, ordered front-to-back traversal with
+/// an 8-lane slab test,
 /// leaves of up to 8 triangles tested 8 at a time by the watertight test (Woop, Benthin & Wald
 /// 2013). Float and double. The SIMD width follows the compiler's target (SSE, AVX2, AVX-512)
 /// through GCC/Clang vector extensions; other compilers get a portable scalar loop.
@@ -113,8 +114,18 @@ template <class T>
 struct BinaryNode {
     Box<T> box;
     std::unique_ptr<BinaryNode> left, right;
-    std::uint32_t first = 0, count = 0; // leaf: a range of the build's primitive order
+    std::uint32_t first = 0, count = 0; // a range of the build's primitive order
+    // The collapse's plan (Bvh::plan): cost[j − 1] is the least SAH cost of this subtree as at
+    // most j children of an 8-wide node; how[j − 1] says how: 0 one child (an 8-wide node, or
+    // this leaf), `merged` one leaf holding the whole subtree, i in 1…7: i children from the
+    // left subtree and up to j − i from the right. An 8-wide node made here takes wide_split
+    // children from the left subtree and up to 8 − wide_split from the right.
+    static constexpr std::uint8_t merged = 0xff;
+    T cost[8] = {};
+    std::uint8_t how[8] = {};
+    std::uint8_t wide_split = 1;
     [[nodiscard]] bool leaf() const noexcept { return !left; }
+    [[nodiscard]] bool becomes_leaf() const noexcept { return !left || how[0] == merged; }
 };
 
 } // namespace detail
@@ -158,6 +169,8 @@ public:
 private:
     static constexpr std::uint32_t leaf_bit = 0x80000000u;
     static constexpr std::uint32_t empty_child = 0xffffffffu;
+    // SAH costs per unit of box area of visiting an 8-wide node and of testing a leaf block.
+    static constexpr T node_cost = T(1), leaf_cost = T(1);
 
     // 8 children: boxes in structure-of-arrays order, child references (node index, or leaf
     // block index | leaf_bit, or empty_child whose box is empty: lo = +∞ > hi = −∞).
@@ -211,7 +224,8 @@ private:
                                  threads_left);
         nodes_.reserve(prims.size() / 4 + 1);
         blocks_.reserve(prims.size() / 2 + 1);
-        if (root->leaf()) { // a single leaf: a root node with one child
+        plan(*root);
+        if (root->becomes_leaf()) { // a single leaf: a root node with one child
             nodes_.emplace_back();
             clear(nodes_[0]);
             set_child(0, 0, *root, add_block(prims, *root));
@@ -275,8 +289,8 @@ private:
                 if (cost < best_cost) best_cost = cost, best_axis = a, best_split = b;
             }
         }
-        const T leaf_cost = box.half_area() * T(count);
-        if (count <= std::uint32_t(leaf_size_) && !(best_cost < leaf_cost - box.half_area())) return node;
+        const T as_leaf = box.half_area() * T(count);
+        if (count <= std::uint32_t(leaf_size_) && !(best_cost < as_leaf - box.half_area())) return node;
 
         std::uint32_t mid;
         detail::Box<T> left_box, right_box, left_centroids, right_centroids;
@@ -347,25 +361,55 @@ private:
         return static_cast<std::uint32_t>(blocks_.size() - 1) | leaf_bit;
     }
 
-    // Collapses binary node `bin` (inner) into an 8-wide node: open the child with the largest
-    // area until there are 8 children or only leaves.
+    // Plans the collapse of the binary tree into 8-wide nodes for the least SAH cost, visiting
+    // a node costing `node_cost` and testing a leaf block `leaf_cost` per unit of box area
+    // (Ylitie, Karras & Laine 2017, §3.1, with whole subtrees of up to leaf_size triangles
+    // allowed to become one leaf). Fills BinaryNode::cost, how and wide_split, bottom-up.
+    void plan(detail::BinaryNode<T>& n) const {
+        const T area = n.box.half_area();
+        if (n.leaf()) {
+            for (int j = 0; j < 8; ++j) n.cost[j] = leaf_cost * area, n.how[j] = 0;
+            return;
+        }
+        plan(*n.left), plan(*n.right);
+        T wide = std::numeric_limits<T>::infinity();
+        for (int i = 1; i < 8; ++i) {
+            const T c = n.left->cost[i - 1] + n.right->cost[7 - i];
+            if (c < wide) wide = c, n.wide_split = std::uint8_t(i);
+        }
+        wide += node_cost * area;
+        n.cost[0] = wide, n.how[0] = 0;
+        if (n.count <= std::uint32_t(leaf_size_) && leaf_cost * area <= wide) n.cost[0] = leaf_cost * area, n.how[0] = n.merged;
+        for (int j = 2; j <= 8; ++j) {
+            n.cost[j - 1] = n.cost[0], n.how[j - 1] = n.how[0];
+            for (int i = 1; i < j; ++i) {
+                const T c = n.left->cost[i - 1] + n.right->cost[j - i - 1];
+                if (c < n.cost[j - 1]) n.cost[j - 1] = c, n.how[j - 1] = std::uint8_t(i);
+            }
+        }
+    }
+
+    // The children `plan` chose for subtree `n` given `slots` places.
+    static void gather(const detail::BinaryNode<T>& n, int slots, std::vector<const detail::BinaryNode<T>*>& kids) {
+        const int how = n.how[slots - 1];
+        if (how == 0 || how == n.merged) {
+            kids.push_back(&n);
+        } else {
+            gather(*n.left, how, kids);
+            gather(*n.right, slots - how, kids);
+        }
+    }
+
+    // Makes the 8-wide node that `plan` chose for binary node `bin` (inner), and its subtree.
     std::uint32_t collapse(const std::vector<Prim>& prims, const detail::BinaryNode<T>& bin) {
         const std::size_t index = nodes_.size();
         nodes_.emplace_back();
         clear(nodes_[index]);
-        std::vector<const detail::BinaryNode<T>*> kids{bin.left.get(), bin.right.get()};
-        while (kids.size() < 8) {
-            int open = -1;
-            T area = -1;
-            for (std::size_t k = 0; k < kids.size(); ++k)
-                if (!kids[k]->leaf() && kids[k]->box.half_area() > area) area = kids[k]->box.half_area(), open = int(k);
-            if (open < 0) break;
-            const detail::BinaryNode<T>* n = kids[std::size_t(open)];
-            kids[std::size_t(open)] = n->left.get();
-            kids.push_back(n->right.get());
-        }
+        std::vector<const detail::BinaryNode<T>*> kids;
+        gather(*bin.left, bin.wide_split, kids);
+        gather(*bin.right, 8 - bin.wide_split, kids);
         for (std::size_t k = 0; k < kids.size(); ++k) {
-            const std::uint32_t ref = kids[k]->leaf() ? add_block(prims, *kids[k]) : collapse(prims, *kids[k]);
+            const std::uint32_t ref = kids[k]->becomes_leaf() ? add_block(prims, *kids[k]) : collapse(prims, *kids[k]);
             set_child(index, int(k), *kids[k], ref);
         }
         return static_cast<std::uint32_t>(index);
