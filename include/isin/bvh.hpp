@@ -692,20 +692,32 @@ private:
                         ref = first_child;
                         continue;
                     }
-                    // Several: visit the nearest next, push the rest farthest first.
-                    Entry hits[8];
-                    int count = 1;
-                    hits[0] = {n.child[k], t_near[k]};
+                    // Two: push the farther, visit the nearer (the common case, no loop).
+                    const Entry c0{n.child[k], t_near[k]};
+                    k = lowest_bit(mask);
+                    mask &= mask - 1;
+                    const Entry c1{n.child[k], t_near[k]};
+                    if (!mask) {
+                        const bool near0 = c0.t < c1.t;
+                        stack[top++] = near0 ? c1 : c0;
+                        ref = near0 ? c0.ref : c1.ref;
+                        continue;
+                    }
+                    // More: push all, sort them on the stack farthest first, visit the nearest.
+                    const int first = top;
+                    stack[top++] = c0, stack[top++] = c1;
                     while (mask) {
                         k = lowest_bit(mask);
                         mask &= mask - 1;
-                        const Entry c{n.child[k], t_near[k]};
-                        int j = count++;
-                        while (j > 0 && hits[j - 1].t < c.t) hits[j] = hits[j - 1], --j; // descending t
-                        hits[j] = c;
+                        stack[top++] = {n.child[k], t_near[k]};
                     }
-                    for (int j = 0; j < count - 1; ++j) stack[top++] = hits[j];
-                    ref = hits[count - 1].ref;
+                    for (int i = first + 1; i < top; ++i) { // insertion sort, descending t
+                        const Entry c = stack[i];
+                        int j = i;
+                        while (j > first && stack[j - 1].t < c.t) stack[j] = stack[j - 1], --j;
+                        stack[j] = c;
+                    }
+                    ref = stack[--top].ref;
                     continue;
                 }
             }
