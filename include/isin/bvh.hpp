@@ -566,28 +566,27 @@ private:
     static bool hit_block_avx2(const Block& b, const RayData& r, BvhHit<T>& best) noexcept {
         const __m256 ox = _mm256_set1_ps(float(r.org[r.kx])), oy = _mm256_set1_ps(float(r.org[r.ky]));
         const __m256 oz = _mm256_set1_ps(float(r.org[r.kz]));
-        const __m256 Sx = _mm256_set1_ps(float(r.Sx)), Sy = _mm256_set1_ps(float(r.Sy)), Sz = _mm256_set1_ps(float(r.Sz));
-        __m256 x[3], y[3], z[3];
+        const __m256 Sx = _mm256_set1_ps(float(r.Sx)), Sy = _mm256_set1_ps(float(r.Sy));
+        __m256 x[3], y[3], pz[3];
         for (int v = 0; v < 3; ++v) {
-            const __m256 pz = _mm256_sub_ps(_mm256_load_ps(b.v[v][r.kz]), oz);
-            x[v] = _mm256_fnmadd_ps(Sx, pz, _mm256_sub_ps(_mm256_load_ps(b.v[v][r.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
-            y[v] = _mm256_fnmadd_ps(Sy, pz, _mm256_sub_ps(_mm256_load_ps(b.v[v][r.ky]), oy));
-            z[v] = _mm256_mul_ps(Sz, pz);
+            pz[v] = _mm256_sub_ps(_mm256_load_ps(b.v[v][r.kz]), oz);
+            x[v] = _mm256_fnmadd_ps(Sx, pz[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+            y[v] = _mm256_fnmadd_ps(Sy, pz[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.ky]), oy));
         }
         const __m256 U = difference_of_products8(x[2], y[1], y[2], x[1]);  // WBW: U = Cx·By − Cy·Bx
         const __m256 V = difference_of_products8(x[0], y[2], y[0], x[2]);  // WBW: V = Ax·Cy − Ay·Cx
         const __m256 W = difference_of_products8(x[1], y[0], y[1], x[0]);  // WBW: W = Bx·Ay − By·Ax
         const __m256 zero = _mm256_setzero_ps();
-        const __m256 any_neg = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_LT_OQ), _mm256_cmp_ps(V, zero, _CMP_LT_OQ)),
-                                            _mm256_cmp_ps(W, zero, _CMP_LT_OQ));
-        const __m256 any_pos = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_GT_OQ), _mm256_cmp_ps(V, zero, _CMP_GT_OQ)),
-                                            _mm256_cmp_ps(W, zero, _CMP_GT_OQ));
+        // Inside: U, V, W all ≥ 0 or all ≤ 0. A NaN passes here and fails det ≠ 0 (ordered) below.
+        const __m256 lowest = _mm256_min_ps(_mm256_min_ps(U, V), W), highest = _mm256_max_ps(_mm256_max_ps(U, V), W);
         const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
-        const __m256 t_scaled = _mm256_fmadd_ps(W, z[2], _mm256_fmadd_ps(V, z[1], _mm256_mul_ps(U, z[0])));
+        __m256 ok = _mm256_and_ps(_mm256_or_ps(_mm256_cmp_ps(lowest, zero, _CMP_GE_OQ), _mm256_cmp_ps(highest, zero, _CMP_LE_OQ)),
+                                  _mm256_cmp_ps(det, zero, _CMP_NEQ_OQ));
+        if (_mm256_testz_ps(ok, ok)) return false; // most blocks end here, before the division
+        const __m256 Sz = _mm256_set1_ps(float(r.Sz));
+        const __m256 t_scaled = _mm256_mul_ps(Sz, _mm256_fmadd_ps(W, pz[2], _mm256_fmadd_ps(V, pz[1], _mm256_mul_ps(U, pz[0]))));
         const __m256 t = _mm256_div_ps(t_scaled, det);
-        const __m256 ok = _mm256_andnot_ps(_mm256_and_ps(any_neg, any_pos),
-                                           _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(det, zero, _CMP_NEQ_OQ), _mm256_cmp_ps(t, zero, _CMP_GT_OQ)),
-                                                         _mm256_cmp_ps(t, _mm256_set1_ps(float(best.t)), _CMP_LT_OQ)));
+        ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(t, zero, _CMP_GT_OQ), _mm256_cmp_ps(t, _mm256_set1_ps(float(best.t)), _CMP_LT_OQ)));
         if (_mm256_testz_ps(ok, ok)) return false;
         // Horizontal minimum of the hits, then its lane.
         const __m256 cand = _mm256_blendv_ps(_mm256_set1_ps(std::numeric_limits<float>::infinity()), t, ok);
