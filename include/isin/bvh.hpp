@@ -423,6 +423,8 @@ private:
         T org_inv_near[3], org_inv_far[3];
         Vertex<T> dir;
         int near_is_lo[3];
+        // byte offsets in a Node of the entry and exit planes of each axis (lo or hi, by sign)
+        std::size_t near_plane[3], far_plane[3];
         // watertight shear (WBW §3)
         int kx, ky, kz;
         T Sx, Sy, Sz;
@@ -445,6 +447,9 @@ private:
             r.org_inv_near[a] = org_inv + allowance;
             r.org_inv_far[a] = org_inv - allowance;
             r.near_is_lo[a] = r.inv[a] >= T(0);
+            const std::size_t lo = std::size_t(a) * sizeof(Node::lo[0]), hi = sizeof(Node::lo) + lo;
+            r.near_plane[a] = r.near_is_lo[a] ? lo : hi;
+            r.far_plane[a] = r.near_is_lo[a] ? hi : lo;
         }
         const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
         r.kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
@@ -454,6 +459,11 @@ private:
         if (dz < T(0)) std::swap(r.kx, r.ky);
         r.Sx = component(d, r.kx) / dz, r.Sy = component(d, r.ky) / dz, r.Sz = T(1) / dz;
         return r;
+    }
+
+    // The 8 lanes of a plane of `n` at byte `offset` (RayData::near_plane, far_plane).
+    static const T* plane(const Node& n, std::size_t offset) noexcept {
+        return reinterpret_cast<const T*>(reinterpret_cast<const char*>(&n) + offset);
     }
 
     // Slab test of the 8 children: bit k set when child k's box is entered before `t_far`.
@@ -468,8 +478,8 @@ private:
             const __m256 w = _mm256_set1_ps(float(widen));
             for (int a = 0; a < 3; ++a) {
                 const __m256 inv = _mm256_set1_ps(float(r.inv[a]));
-                const float* near_plane = r.near_is_lo[a] ? n.lo[a] : n.hi[a];
-                const float* far_plane = r.near_is_lo[a] ? n.hi[a] : n.lo[a];
+                const float* near_plane = plane(n, r.near_plane[a]);
+                const float* far_plane = plane(n, r.far_plane[a]);
 #if defined(__FMA__)
                 // p·inv − o·inv in one FMA; o·inv is rounded, so the entry subtracts and the exit
                 // adds the per-ray allowance (prepare: org_inv_near / org_inv_far).
