@@ -422,7 +422,6 @@ private:
         // distance computed as p·inv − o·inv: entries use the lowered, exits the raised value.
         T org_inv_near[3], org_inv_far[3];
         Vertex<T> dir;
-        int near_is_lo[3];
         // byte offsets in a Node of the entry and exit planes of each axis (lo or hi, by sign)
         std::size_t near_plane[3], far_plane[3];
         // watertight shear (WBW §3)
@@ -431,33 +430,41 @@ private:
         bool ok;
     };
 
+    // Per-ray set-up, with as few branches as it can: most rays of a frame cost a few node
+    // visits, so this is a fair part of their time.
     static RayData prepare(const Ray<T>& ray) noexcept {
-        RayData r{};
+        RayData r;
+        const Vertex<T>& o = ray.origin;
         const Vertex<T>& d = ray.direction;
-        r.ok = is_finite(ray.origin) && is_finite(d) && (d.x != T(0) || d.y != T(0) || d.z != T(0));
         r.dir = d;
+        const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
+        // x − x is 0 for a finite x and NaN otherwise
+        const T finite = ((o.x - o.x) + (o.y - o.y)) + ((o.z - o.z) + (d.x - d.x)) + ((d.y - d.y) + (d.z - d.z));
+        r.ok = (finite == T(0)) & (std::max(ax, std::max(ay, az)) > T(0));
         constexpr T tiny = sizeof(T) == 4 ? T(1e-18) : T(1e-150);
         for (int a = 0; a < 3; ++a) {
-            T da = component(d, a);
-            if (std::fabs(da) < tiny) da = std::copysign(tiny, da); // ±0 → ±tiny: no 0·∞ = NaN
-            r.org[a] = component(ray.origin, a);
-            r.inv[a] = T(1) / da;
+            const T da = component(d, a);
+            const T safe = std::fabs(da) < tiny ? std::copysign(tiny, da) : da; // ±0 → ±tiny: no 0·∞ = NaN
+            r.org[a] = component(o, a);
+            r.inv[a] = T(1) / safe;
             const T org_inv = r.org[a] * r.inv[a];
             const T allowance = T(4) * std::numeric_limits<T>::epsilon() * std::fabs(org_inv);
             r.org_inv_near[a] = org_inv + allowance;
             r.org_inv_far[a] = org_inv - allowance;
-            r.near_is_lo[a] = r.inv[a] >= T(0);
+            const bool near_is_lo = !std::signbit(safe);
             const std::size_t lo = std::size_t(a) * sizeof(Node::lo[0]), hi = sizeof(Node::lo) + lo;
-            r.near_plane[a] = r.near_is_lo[a] ? lo : hi;
-            r.far_plane[a] = r.near_is_lo[a] ? hi : lo;
+            r.near_plane[a] = near_is_lo ? lo : hi;
+            r.far_plane[a] = near_is_lo ? hi : lo;
         }
-        const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
-        r.kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
-        r.kx = r.kz == 2 ? 0 : r.kz + 1;
-        r.ky = r.kx == 2 ? 0 : r.kx + 1;
-        const T dz = component(d, r.kz);
-        if (dz < T(0)) std::swap(r.kx, r.ky);
-        r.Sx = component(d, r.kx) / dz, r.Sy = component(d, r.ky) / dz, r.Sz = T(1) / dz;
+        // WBW §3: kz the axis of the largest |d|, kx and ky the next two, swapped when d[kz] < 0
+        // so that the triangles' winding is kept.
+        const int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+        const int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
+        const T dz = component(d, kz);
+        const bool flip = dz < T(0);
+        r.kz = kz, r.kx = flip ? ky : kx, r.ky = flip ? kx : ky;
+        r.Sz = T(1) / dz;
+        r.Sx = component(d, r.kx) / dz, r.Sy = component(d, r.ky) / dz;
         return r;
     }
 
@@ -499,12 +506,11 @@ private:
 #endif
 #if ISIN_VECTOR_EXTENSIONS
         using V = detail::L8<T>;
-        V tn = V{} , tf = V{} + t_far, lo, hi;
+        V tn = V{} , tf = V{} + t_far, near_plane, far_plane;
         for (int a = 0; a < 3; ++a) {
-            std::memcpy(&lo, n.lo[a], sizeof lo);
-            std::memcpy(&hi, n.hi[a], sizeof hi);
-            const V ta = (lo - r.org[a]) * r.inv[a], tb = (hi - r.org[a]) * r.inv[a];
-            const V near = r.near_is_lo[a] ? ta : tb, far = (r.near_is_lo[a] ? tb : ta) * widen;
+            std::memcpy(&near_plane, plane(n, r.near_plane[a]), sizeof near_plane);
+            std::memcpy(&far_plane, plane(n, r.far_plane[a]), sizeof far_plane);
+            const V near = (near_plane - r.org[a]) * r.inv[a], far = (far_plane - r.org[a]) * r.inv[a] * widen;
             tn = tn > near ? tn : near;
             tf = tf < far ? tf : far;
         }
@@ -518,9 +524,8 @@ private:
         for (int k = 0; k < 8; ++k) {
             T tn = T(0), tf = t_far;
             for (int a = 0; a < 3; ++a) {
-                const T ta = (n.lo[a][k] - r.org[a]) * r.inv[a], tb = (n.hi[a][k] - r.org[a]) * r.inv[a];
-                tn = std::max(tn, r.near_is_lo[a] ? ta : tb);
-                tf = std::min(tf, (r.near_is_lo[a] ? tb : ta) * widen);
+                tn = std::max(tn, (plane(n, r.near_plane[a])[k] - r.org[a]) * r.inv[a]);
+                tf = std::min(tf, (plane(n, r.far_plane[a])[k] - r.org[a]) * r.inv[a] * widen);
             }
             t_near[k] = tn;
             mask |= unsigned(tn <= tf) << k;
