@@ -444,7 +444,7 @@ private:
         constexpr T tiny = sizeof(T) == 4 ? T(1e-18) : T(1e-150);
         for (int a = 0; a < 3; ++a) {
             const T da = component(d, a);
-            const T safe = std::fabs(da) < tiny ? std::copysign(tiny, da) : da; // ±0 → ±tiny: no 0·∞ = NaN
+            const T safe = std::copysign(std::max(std::fabs(da), tiny), da); // ±0 → ±tiny: no 0·∞ = NaN
             r.org[a] = component(o, a);
             r.inv[a] = T(1) / safe;
             const T org_inv = r.org[a] * r.inv[a];
