@@ -418,8 +418,13 @@ private:
     // ---- traversal ---------------------------------------------------------------------
     struct RayData {
         T org[3], inv[3];
-        // o·inv lowered / raised by 4ε|o·inv|, the most its rounding (and inv's) can move a slab
-        // distance computed as p·inv − o·inv: entries use the lowered, exits the raised value.
+        // inv·(1 + 2γ₃) for exit distances (Ize 2013, pbrt): however p·inv − o·inv is rounded
+        // (inv, this product, the FMA or the difference and product: each at most u relative),
+        // the exit distance comes out no smaller than the exact one, so rounding never drops a
+        // box that the ray touches and the traversal stays as watertight as the triangle test.
+        T inv_far[3];
+        // o·inv (entries) and o·inv_far (exits), lowered / raised by 4ε|·|, more than their own
+        // rounding can move a distance computed as p·inv − o·inv in one FMA.
         T org_inv_near[3], org_inv_far[3];
         Vertex<T> dir;
         // byte offsets in a Node of the entry and exit planes of each axis (lo or hi, by sign)
@@ -442,15 +447,17 @@ private:
         const T finite = ((o.x - o.x) + (o.y - o.y)) + ((o.z - o.z) + (d.x - d.x)) + ((d.y - d.y) + (d.z - d.z));
         r.ok = (finite == T(0)) & (std::max(ax, std::max(ay, az)) > T(0));
         constexpr T tiny = sizeof(T) == 4 ? T(1e-18) : T(1e-150);
+        constexpr T u = std::numeric_limits<T>::epsilon() / 2, widen = T(1) + T(2) * (T(3) * u / (T(1) - T(3) * u));
         for (int a = 0; a < 3; ++a) {
             const T da = component(d, a);
             const T safe = std::copysign(std::max(std::fabs(da), tiny), da); // ±0 → ±tiny: no 0·∞ = NaN
             r.org[a] = component(o, a);
             r.inv[a] = T(1) / safe;
-            const T org_inv = r.org[a] * r.inv[a];
-            const T allowance = T(4) * std::numeric_limits<T>::epsilon() * std::fabs(org_inv);
-            r.org_inv_near[a] = org_inv + allowance;
-            r.org_inv_far[a] = org_inv - allowance;
+            r.inv_far[a] = r.inv[a] * widen;
+            const T org_inv = r.org[a] * r.inv[a], org_inv_far = r.org[a] * r.inv_far[a];
+            constexpr T allowance = T(4) * std::numeric_limits<T>::epsilon();
+            r.org_inv_near[a] = org_inv + allowance * std::fabs(org_inv);
+            r.org_inv_far[a] = org_inv_far - allowance * std::fabs(org_inv_far);
             const bool near_is_lo = !std::signbit(safe);
             const std::size_t lo = std::size_t(a) * sizeof(Node::lo[0]), hi = sizeof(Node::lo) + lo;
             r.near_plane[a] = near_is_lo ? lo : hi;
@@ -474,32 +481,28 @@ private:
     }
 
     // Slab test of the 8 children: bit k set when child k's box is entered before `t_far`.
-    // The exit distance is enlarged by 1 + 2γ₃ (Ize 2013, pbrt), so rounding never drops a box
-    // that the ray touches: the traversal stays as watertight as the triangle test.
+    // Exits are computed with RayData::inv_far, so that no rounding drops a box the ray touches.
     static unsigned hit_children(const Node& n, const RayData& r, T t_far, T (&t_near)[8]) noexcept {
-        constexpr T eps = std::numeric_limits<T>::epsilon() / 2;
-        constexpr T widen = T(1) + T(2) * (T(3) * eps / (T(1) - T(3) * eps));
 #if defined(__AVX__)
         if constexpr (sizeof(T) == sizeof(float)) { // 8 boxes in one 256-bit register per plane
-            __m256 tn = _mm256_setzero_ps(), tf = _mm256_set1_ps(float(t_far));
-            const __m256 w = _mm256_set1_ps(float(widen));
+            __m256 t0[3], t1[3]; // entry and exit distances of each axis' slab
             for (int a = 0; a < 3; ++a) {
-                const __m256 inv = _mm256_set1_ps(float(r.inv[a]));
-                const float* near_plane = plane(n, r.near_plane[a]);
-                const float* far_plane = plane(n, r.far_plane[a]);
+                const __m256 near_plane = _mm256_load_ps(plane(n, r.near_plane[a]));
+                const __m256 far_plane = _mm256_load_ps(plane(n, r.far_plane[a]));
 #if defined(__FMA__)
                 // p·inv − o·inv in one FMA; o·inv is rounded, so the entry subtracts and the exit
                 // adds the per-ray allowance (prepare: org_inv_near / org_inv_far).
-                const __m256 t0 = _mm256_fmsub_ps(_mm256_load_ps(near_plane), inv, _mm256_set1_ps(float(r.org_inv_near[a])));
-                const __m256 t1 = _mm256_mul_ps(_mm256_fmsub_ps(_mm256_load_ps(far_plane), inv, _mm256_set1_ps(float(r.org_inv_far[a]))), w);
+                t0[a] = _mm256_fmsub_ps(near_plane, _mm256_set1_ps(float(r.inv[a])), _mm256_set1_ps(float(r.org_inv_near[a])));
+                t1[a] = _mm256_fmsub_ps(far_plane, _mm256_set1_ps(float(r.inv_far[a])), _mm256_set1_ps(float(r.org_inv_far[a])));
 #else
                 const __m256 org = _mm256_set1_ps(float(r.org[a]));
-                const __m256 t0 = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(near_plane), org), inv);
-                const __m256 t1 = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(far_plane), org), inv), w);
+                t0[a] = _mm256_mul_ps(_mm256_sub_ps(near_plane, org), _mm256_set1_ps(float(r.inv[a])));
+                t1[a] = _mm256_mul_ps(_mm256_sub_ps(far_plane, org), _mm256_set1_ps(float(r.inv_far[a])));
 #endif
-                tn = _mm256_max_ps(tn, t0);
-                tf = _mm256_min_ps(tf, t1);
             }
+            // two levels of max / min, not three: this is the traversal's critical path
+            const __m256 tn = _mm256_max_ps(_mm256_max_ps(t0[0], t0[1]), _mm256_max_ps(t0[2], _mm256_setzero_ps()));
+            const __m256 tf = _mm256_min_ps(_mm256_min_ps(t1[0], t1[1]), _mm256_min_ps(t1[2], _mm256_set1_ps(float(t_far))));
             _mm256_storeu_ps(reinterpret_cast<float*>(t_near), tn);
             return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ)));
         }
@@ -510,7 +513,7 @@ private:
         for (int a = 0; a < 3; ++a) {
             std::memcpy(&near_plane, plane(n, r.near_plane[a]), sizeof near_plane);
             std::memcpy(&far_plane, plane(n, r.far_plane[a]), sizeof far_plane);
-            const V near = (near_plane - r.org[a]) * r.inv[a], far = (far_plane - r.org[a]) * r.inv[a] * widen;
+            const V near = (near_plane - r.org[a]) * r.inv[a], far = (far_plane - r.org[a]) * r.inv_far[a];
             tn = tn > near ? tn : near;
             tf = tf < far ? tf : far;
         }
@@ -525,7 +528,7 @@ private:
             T tn = T(0), tf = t_far;
             for (int a = 0; a < 3; ++a) {
                 tn = std::max(tn, (plane(n, r.near_plane[a])[k] - r.org[a]) * r.inv[a]);
-                tf = std::min(tf, (plane(n, r.far_plane[a])[k] - r.org[a]) * r.inv[a] * widen);
+                tf = std::min(tf, (plane(n, r.far_plane[a])[k] - r.org[a]) * r.inv_far[a]);
             }
             t_near[k] = tn;
             mask |= unsigned(tn <= tf) << k;
