@@ -463,8 +463,15 @@ private:
             r.near_plane[a] = near_is_lo ? lo : hi;
             r.far_plane[a] = near_is_lo ? hi : lo;
         }
-        // WBW §3: kz the axis of the largest |d|, kx and ky the next two, swapped when d[kz] < 0
-        // so that the triangles' winding is kept.
+        return r;
+    }
+
+    // The leaves' part of the set-up, done when a ray reaches its first leaf (most rays of a
+    // frame that miss never do). WBW §3: kz the axis of the largest |d|, kx and ky the next
+    // two, swapped when d[kz] < 0 so that the triangles' winding is kept.
+    static void prepare_shear(RayData& r) noexcept {
+        const Vertex<T>& d = r.dir;
+        const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
         const int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
         const int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
         const T dz = component(d, kz);
@@ -472,7 +479,6 @@ private:
         r.kz = kz, r.kx = flip ? ky : kx, r.ky = flip ? kx : ky;
         r.Sz = T(1) / dz;
         r.Sx = component(d, r.kx) / dz, r.Sy = component(d, r.ky) / dz;
-        return r;
     }
 
     // The 8 lanes of a plane of `n` at byte `offset` (RayData::near_plane, far_plane).
@@ -672,8 +678,9 @@ private:
     template <bool any_hit>
     bool traverse(const Ray<T>& ray, BvhHit<T>& best) const noexcept {
         if (nodes_.empty()) return false;
-        const RayData r = prepare(ray);
+        RayData r = prepare(ray);
         if (!r.ok || !(best.t > T(0))) return false;
+        bool sheared = false;
         struct Entry {
             std::uint32_t ref;
             T t;
@@ -684,6 +691,7 @@ private:
         bool hit = false;
         for (;;) {
             if (ref & leaf_bit) {
+                if (!sheared) prepare_shear(r), sheared = true;
                 if (hit_block(blocks_[ref & ~leaf_bit], r, best)) {
                     hit = true;
                     if (any_hit) return true;
