@@ -68,7 +68,10 @@ struct Box {
         lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
         hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
     }
-    void grow(const Box& b) noexcept { grow(b.lo), grow(b.hi); }
+    void grow(const Box& b) noexcept { // the union; an empty b (lo = +∞, hi = −∞) changes nothing
+        lo = {std::min(lo.x, b.lo.x), std::min(lo.y, b.lo.y), std::min(lo.z, b.lo.z)};
+        hi = {std::max(hi.x, b.hi.x), std::max(hi.y, b.hi.y), std::max(hi.z, b.hi.z)};
+    }
     [[nodiscard]] T half_area() const noexcept {
         const Vertex<T> e = hi - lo;
         return e.x < T(0) ? T(0) : e.x * e.y + e.y * e.z + e.z * e.x;
