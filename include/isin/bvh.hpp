@@ -239,7 +239,7 @@ private:
     }
 
     // Binary SAH build of prims[first, first + count), whose box and centroid bounds the caller
-    // knows. One pass bins the centroids on all three axes (16 bins); the sweep gives the
+    // knows. One pass bins the centroids on all three axes (8 bins); the sweep gives the
     // children's boxes and centroid bounds, so no level re-reads its primitives for them. Past
     // depth 40 it splits at the median of the widest axis, which bounds the depth (and so the
     // traversal stack) for any input.
@@ -251,7 +251,7 @@ private:
         node->box = box, node->first = first, node->count = count;
         if (count <= 2 && count <= std::uint32_t(leaf_size_)) return node;
 
-        constexpr int bins = 16;
+        constexpr int bins = 8;
         struct Bin {
             detail::Box4<T> box, centroids;
             std::uint32_t n = 0;
