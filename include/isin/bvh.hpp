@@ -251,7 +251,7 @@ private:
         node->box = box, node->first = first, node->count = count;
         if (count <= 2 && count <= std::uint32_t(leaf_size_)) return node;
 
-        constexpr int bins = 8;
+        constexpr int bins = 8; // 16 or 32 trace no faster on the vs_embree meshes and build 20-40% slower
         struct Bin {
             detail::Box4<T> box, centroids;
             std::uint32_t n = 0;
