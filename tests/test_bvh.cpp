@@ -165,3 +165,19 @@ TEST_CASE("BVH: one-thread and multi-thread builds give the same answers") {
     }
     CHECK(differ == 0);
 }
+
+TEST_CASE_TEMPLATE("BVH build: a box grown by an empty box (an empty bin) is unchanged", T, float, double) {
+    // Regression: growing by the corners of an empty box (lo = +inf, hi = -inf) made the box
+    // infinite, so every SAH cost after an empty bin was infinite and good splits were skipped.
+    isin::detail::Box<T> box;
+    box.grow(isin::Vertex<T>{1, 2, 3});
+    box.grow(isin::Vertex<T>{4, 5, 6});
+    const T area = box.half_area();
+    box.grow(isin::detail::Box<T>{});
+    CHECK(box.lo.x == T(1));
+    CHECK(box.hi.z == T(6));
+    CHECK(box.half_area() == area);
+    isin::detail::Box<T> empty;
+    empty.grow(box);
+    CHECK(empty.half_area() == area);
+}
