@@ -18,6 +18,7 @@
 #include <limits>
 #include <memory>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "ray.hpp"
@@ -112,6 +113,17 @@ struct Box4 {
     }
 };
 
+// An allocator whose value-less construct() leaves trivial values uninitialised, so that
+// resizing a vector that the build then fills in parallel does not first zero it serially.
+template <class T>
+struct UninitAllocator : std::allocator<T> {
+    template <class U> struct rebind { using other = UninitAllocator<U>; };
+    UninitAllocator() = default;
+    template <class U> UninitAllocator(const UninitAllocator<U>&) noexcept {}
+    template <class U> void construct(U* p) noexcept { ::new (static_cast<void*>(p)) U; }
+    template <class U, class... A> void construct(U* p, A&&... a) { ::new (static_cast<void*>(p)) U(std::forward<A>(a)...); }
+};
+
 // A node of the binary SAH tree, before it is collapsed to 8-wide nodes.
 template <class T>
 struct BinaryNode {
@@ -193,49 +205,87 @@ private:
         std::uint32_t index;
         [[nodiscard]] T center(int axis) const noexcept { return centroid[axis]; }
     };
+    using Prims = std::vector<Prim, detail::UninitAllocator<Prim>>;
 
     // ---- build -------------------------------------------------------------------------
     void build(const std::vector<Triangle<T>>& triangles, const BvhOptions& options) {
         triangles_ = &triangles;
-        std::vector<Prim> prims;
-        prims.reserve(triangles.size());
-        for (std::size_t i = 0; i < triangles.size(); ++i) {
-            const Triangle<T>& tri = triangles[i];
-            if (!is_finite(tri.v0) || !is_finite(tri.v1) || !is_finite(tri.v2)) continue;
-            const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
-            if (detail::is_degenerate(e1, e2, cross(e1, e2))) continue;
-            detail::Box<T> b;
-            b.grow(tri.v0), b.grow(tri.v1), b.grow(tri.v2);
-            Prim p;
-            for (int a = 0; a < 3; ++a) {
-                p.lo[a] = component(b.lo, a), p.hi[a] = component(b.hi, a);
-                p.centroid[a] = (p.lo[a] + p.hi[a]) * T(0.5);
+        const int hw = int(std::thread::hardware_concurrency());
+        const int threads = std::max(1, options.threads > 0 ? options.threads : hw);
+        // The primitives (box, centroid) of the triangles, in chunks; unusable triangles (not
+        // finite, zero area) are marked and then left out.
+        Prims prims(triangles.size());
+        std::atomic<bool> unusable{false};
+        parallel_chunks(triangles.size(), threads, [&](int, std::size_t begin, std::size_t end) {
+            bool skipped = false;
+            for (std::size_t i = begin; i < end; ++i) {
+                const Triangle<T>& tri = triangles[i];
+                Prim& p = prims[i];
+                p.index = empty_child;
+                const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+                if (!is_finite(tri.v0) || !is_finite(tri.v1) || !is_finite(tri.v2) ||
+                    detail::is_degenerate(e1, e2, cross(e1, e2))) {
+                    skipped = true;
+                    continue;
+                }
+                detail::Box<T> b;
+                b.grow(tri.v0), b.grow(tri.v1), b.grow(tri.v2);
+                for (int a = 0; a < 3; ++a) {
+                    p.lo[a] = component(b.lo, a), p.hi[a] = component(b.hi, a);
+                    p.centroid[a] = (p.lo[a] + p.hi[a]) * T(0.5);
+                }
+                p.lo[3] = p.hi[3] = p.centroid[3] = T(0);
+                p.index = static_cast<std::uint32_t>(i);
             }
-            p.lo[3] = p.hi[3] = p.centroid[3] = T(0);
-            p.index = static_cast<std::uint32_t>(i);
-            prims.push_back(p);
-        }
+            if (skipped) unusable = true;
+        });
+        if (unusable)
+            prims.erase(std::remove_if(prims.begin(), prims.end(), [](const Prim& p) { return p.index == empty_child; }),
+                        prims.end());
         primitives_ = prims.size();
         nodes_.clear(), blocks_.clear();
         if (prims.empty()) return;
         leaf_size_ = std::clamp(options.leaf_size, 1, 8);
-        const int hw = int(std::thread::hardware_concurrency());
-        std::atomic<int> threads_left{std::max(1, options.threads > 0 ? options.threads : hw) - 1};
+        std::atomic<int> threads_left{threads - 1};
         detail::Box4<T> box, centroids;
         for (const Prim& p : prims) box.grow(p.lo, p.hi), centroids.grow(p.centroid, p.centroid);
         auto root = build_binary(prims, 0, static_cast<std::uint32_t>(prims.size()), box.box(), centroids.box(), 0,
                                  threads_left);
         nodes_.reserve(prims.size() / 4 + 1);
-        blocks_.reserve(prims.size() / 2 + 1);
+        leaves_.clear();
         plan(*root);
         if (root->becomes_leaf()) { // a single leaf: a root node with one child
             nodes_.emplace_back();
             clear(nodes_[0]);
-            set_child(0, 0, *root, add_block(prims, *root));
+            set_child(0, 0, *root, add_block(*root));
         } else {
-            collapse(prims, *root);
+            collapse(*root);
         }
+        // The leaves' triangles, gathered into blocks: the collapse's costly part, in chunks.
+        blocks_.resize(leaves_.size());
+        parallel_chunks(leaves_.size(), threads, [&](int, std::size_t begin, std::size_t end) {
+            for (std::size_t k = begin; k < end; ++k) fill_block(blocks_[k], prims, leaves_[k].first, leaves_[k].count);
+        });
+        leaves_ = {};
         triangles_ = nullptr;
+    }
+
+    // Runs f(part, begin, end) over [0, n) cut into up to `threads` parts, part 0 on this
+    // thread. Below 32768 items, or if a thread cannot be started, the work stays here.
+    template <class F>
+    static void parallel_chunks(std::size_t n, int threads, const F& f) {
+        const std::size_t parts = n < 32768 ? 1 : std::size_t(threads);
+        const std::size_t chunk = (n + parts - 1) / std::max<std::size_t>(parts, 1);
+        std::vector<std::thread> workers;
+        std::size_t next = 1; // the first part not handed to a worker
+        try {
+            for (; next < parts; ++next)
+                workers.emplace_back(f, int(next), std::min(n, next * chunk), std::min(n, (next + 1) * chunk));
+        } catch (...) { // no more threads: the remaining parts run here
+        }
+        f(0, std::size_t(0), std::min(n, chunk));
+        for (std::size_t k = next; k < parts; ++k) f(int(k), std::min(n, k * chunk), std::min(n, (k + 1) * chunk));
+        for (std::thread& w : workers) w.join();
     }
 
     // Binary SAH build of prims[first, first + count), whose box and centroid bounds the caller
@@ -243,7 +293,7 @@ private:
     // children's boxes and centroid bounds, so no level re-reads its primitives for them. Past
     // depth 40 it splits at the median of the widest axis, which bounds the depth (and so the
     // traversal stack) for any input.
-    std::unique_ptr<detail::BinaryNode<T>> build_binary(std::vector<Prim>& prims, std::uint32_t first,
+    std::unique_ptr<detail::BinaryNode<T>> build_binary(Prims& prims, std::uint32_t first,
                                                         std::uint32_t count, const detail::Box<T>& box,
                                                         const detail::Box<T>& centroids, int depth,
                                                         std::atomic<int>& threads_left) {
@@ -353,19 +403,24 @@ private:
         n.child[slot] = ref;
     }
 
-    std::uint32_t add_block(const std::vector<Prim>& prims, const detail::BinaryNode<T>& leaf) {
-        Block b{};
-        for (int k = 0; k < 8; ++k) b.primitive[k] = empty_child;
-        for (std::uint32_t k = 0; k < leaf.count; ++k) {
-            const std::uint32_t index = prims[leaf.first + k].index;
-            const Triangle<T>& tri = (*triangles_)[index];
-            const Vertex<T>* vs[3] = {&tri.v0, &tri.v1, &tri.v2};
+    // A leaf block for the range of `leaf`; its triangles are filled in after the collapse.
+    std::uint32_t add_block(const detail::BinaryNode<T>& leaf) {
+        leaves_.push_back({leaf.first, leaf.count});
+        return static_cast<std::uint32_t>(leaves_.size() - 1) | leaf_bit;
+    }
+
+    // Block `b` holds the triangles of prims[first, first + count); unused lanes are zero.
+    void fill_block(Block& b, const Prims& prims, std::uint32_t first, std::uint32_t count) const noexcept {
+        for (int k = 0; k < 8; ++k) {
+            const bool used = std::uint32_t(k) < count;
+            const std::uint32_t index = used ? prims[first + std::uint32_t(k)].index : empty_child;
+            const Triangle<T>* tri = used ? &(*triangles_)[index] : nullptr;
+            const Vertex<T> zero{};
+            const Vertex<T>* vs[3] = {used ? &tri->v0 : &zero, used ? &tri->v1 : &zero, used ? &tri->v2 : &zero};
             for (int v = 0; v < 3; ++v)
                 for (int a = 0; a < 3; ++a) b.v[v][a][k] = component(*vs[v], a);
             b.primitive[k] = index;
         }
-        blocks_.push_back(b);
-        return static_cast<std::uint32_t>(blocks_.size() - 1) | leaf_bit;
     }
 
     // Plans the collapse of the binary tree into 8-wide nodes for the least SAH cost, visiting
@@ -408,7 +463,7 @@ private:
     }
 
     // Makes the 8-wide node that `plan` chose for binary node `bin` (inner), and its subtree.
-    std::uint32_t collapse(const std::vector<Prim>& prims, const detail::BinaryNode<T>& bin) {
+    std::uint32_t collapse(const detail::BinaryNode<T>& bin) {
         const std::size_t index = nodes_.size();
         nodes_.emplace_back();
         clear(nodes_[index]);
@@ -416,7 +471,7 @@ private:
         gather(*bin.left, bin.wide_split, kids);
         gather(*bin.right, 8 - bin.wide_split, kids);
         for (std::size_t k = 0; k < kids.size(); ++k) {
-            const std::uint32_t ref = kids[k]->becomes_leaf() ? add_block(prims, *kids[k]) : collapse(prims, *kids[k]);
+            const std::uint32_t ref = kids[k]->becomes_leaf() ? add_block(*kids[k]) : collapse(*kids[k]);
             set_child(index, int(k), *kids[k], ref);
         }
         return static_cast<std::uint32_t>(index);
@@ -766,10 +821,14 @@ private:
     }
 
     std::vector<Node> nodes_;
-    std::vector<Block> blocks_;
+    std::vector<Block, detail::UninitAllocator<Block>> blocks_; // filled in parallel after the collapse
     std::size_t primitives_ = 0;
     int leaf_size_ = 8;
     const std::vector<Triangle<T>>* triangles_ = nullptr; // during the build only
+    struct Range {
+        std::uint32_t first, count;
+    };
+    std::vector<Range> leaves_; // during the build only: the prims of each block
 };
 
 } // namespace isin
