@@ -1,7 +1,8 @@
 #pragma once
 // Embree 3 set-up shared by the benchmarks that compare against it (vs_embree, scaling): an
 // error callback that stops the run, and one triangle-soup geometry built at MEDIUM quality
-// (vertex i of triangle k is vertex 3k + i — the triangles are a soup to Embree as to isin).
+// (vertex i of triangle k is vertex 3k + i — the triangles are a soup to Embree as to isin),
+// with scene flags if asked (RTC_SCENE_FLAG_ROBUST: Embree's watertight mode, for checks).
 #include <embree3/rtcore.h>
 
 #include <cstddef>
@@ -18,8 +19,10 @@ inline void on_error(void*, RTCError code, const char* message) {
     std::exit(3);
 }
 
-inline RTCScene make(RTCDevice device, const std::vector<isin::Triangle<float>>& tris) {
+inline RTCScene make(RTCDevice device, const std::vector<isin::Triangle<float>>& tris,
+                     RTCSceneFlags flags = RTC_SCENE_FLAG_NONE) {
     RTCScene scene = rtcNewScene(device);
+    rtcSetSceneFlags(scene, flags);
     rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
     RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_MEDIUM);

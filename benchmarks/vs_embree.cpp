@@ -22,6 +22,9 @@
 //
 // Checks: primary hit count and Σt of isin, Embree-1 and Embree-16 must agree to 1e-5 relative,
 // and so must the number of occluded shadow rays; the program exits with status 1 otherwise.
+// For reference it also prints the counts of Embree's robust mode (RTC_SCENE_FLAG_ROBUST, its
+// watertight test), traced once and untimed: where Embree's default test leaks through shared
+// edges its count differs from isin's, the robust one should not.
 //
 // Run: build/…/benchmarks/vs_embree [--mesh NAME] [--repeats N] [--threads-list 1,2]
 //      [--width W --height H] [--csv FILE]            (built with -march=native)
@@ -182,7 +185,8 @@ struct Bench {
         });
     }
 
-    Totals embree1_primary(int threads, double& s) const {
+    Totals embree1_primary(int threads, double& s) const { return embree1_primary(threads, s, scene); }
+    Totals embree1_primary(int threads, double& s, RTCScene target) const {
         return run_bands(bands, threads, s, [&](int band, Totals& out) {
             RTCIntersectContext context;
             rtcInitIntersectContext(&context);
@@ -196,7 +200,7 @@ struct Bench {
                     rh.ray.tnear = 0.0f, rh.ray.tfar = inf, rh.ray.time = 0.0f;
                     rh.ray.mask = ~0u, rh.ray.id = 0, rh.ray.flags = 0;
                     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-                    rtcIntersect1(scene, &context, &rh);
+                    rtcIntersect1(target, &context, &rh);
                     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) ++acc.hits, acc.sum_t += double(rh.ray.tfar);
                 }
             out = acc;
@@ -240,7 +244,8 @@ struct Bench {
         });
     }
 
-    Totals embree1_shadow(int threads, double& s) const {
+    Totals embree1_shadow(int threads, double& s) const { return embree1_shadow(threads, s, scene); }
+    Totals embree1_shadow(int threads, double& s, RTCScene target) const {
         return run_bands(bands, threads, s, [&](int band, Totals& out) {
             RTCIntersectContext context;
             rtcInitIntersectContext(&context);
@@ -252,7 +257,7 @@ struct Bench {
                 ray.dir_x = r.ray.direction.x, ray.dir_y = r.ray.direction.y, ray.dir_z = r.ray.direction.z;
                 ray.tnear = 0.0f, ray.tfar = r.t_max, ray.time = 0.0f;
                 ray.mask = ~0u, ray.id = 0, ray.flags = 0;
-                rtcOccluded1(scene, &context, &ray);
+                rtcOccluded1(target, &context, &ray);
                 if (ray.tfar < 0.0f) ++acc.hits; // Embree sets tfar = −∞ when occluded
             }
             out = acc;
@@ -410,6 +415,13 @@ int run(const Options& opt) {
             for (int m = 0; m < 3; ++m) ok = ok && tot[m].hits == ref[m].hits && relative(tot[m].sum_t, ref[m].sum_t) < 1e-12;
             for (int m = 0; m < 2; ++m) ok = ok && tot[3 + m].hits == shadow_ref[m].hits;
         }
+        // Embree's robust (watertight) mode, traced once, untimed: where Embree's default test
+        // leaks through shared edges, its hit count differs from isin's; this one should not.
+        RTCScene robust = embree_scene::make(device, tris, RTC_SCENE_FLAG_ROBUST);
+        double unused = 0;
+        const Totals robust_primary = bench.embree1_primary(opt.threads.front(), unused, robust);
+        const Totals robust_shadow = bench.embree1_shadow(opt.threads.front(), unused, robust);
+        rtcReleaseScene(robust);
         const bool primary_ok = relative(double(ref[0].hits), double(ref[1].hits)) <= tolerance &&
                                 relative(double(ref[0].hits), double(ref[2].hits)) <= tolerance &&
                                 relative(ref[0].sum_t, ref[1].sum_t) <= tolerance &&
@@ -417,12 +429,13 @@ int run(const Options& opt) {
         const bool shadow_ok = relative(double(shadow_ref[0].hits), double(shadow_ref[1].hits)) <= tolerance;
         ok = ok && primary_ok && shadow_ok;
         all_ok = all_ok && ok;
-        std::printf("  %s %s: hits isin %llu E-1 %llu E-16 %llu (%.1f%% of rays); sum t isin %.9g E-1 %.9g E-16 %.9g;"
-                    " occluded isin %llu E-1 %llu\n", ok ? "OK" : "MISMATCH", name.c_str(),
-                    static_cast<unsigned long long>(ref[0].hits), static_cast<unsigned long long>(ref[1].hits),
-                    static_cast<unsigned long long>(ref[2].hits), 100.0 * double(ref[0].hits) / (double(opt.width) * double(opt.height)),
-                    ref[0].sum_t, ref[1].sum_t, ref[2].sum_t, static_cast<unsigned long long>(shadow_ref[0].hits),
-                    static_cast<unsigned long long>(shadow_ref[1].hits));
+        std::printf("  %s %s: hits isin %llu E-1 %llu E-16 %llu E-robust %llu (%.1f%% of rays); sum t isin %.9g E-1 %.9g"
+                    " E-16 %.9g E-robust %.9g; occluded isin %llu E-1 %llu E-robust %llu\n", ok ? "OK" : "MISMATCH",
+                    name.c_str(), static_cast<unsigned long long>(ref[0].hits), static_cast<unsigned long long>(ref[1].hits),
+                    static_cast<unsigned long long>(ref[2].hits), static_cast<unsigned long long>(robust_primary.hits),
+                    100.0 * double(ref[0].hits) / (double(opt.width) * double(opt.height)), ref[0].sum_t, ref[1].sum_t,
+                    ref[2].sum_t, robust_primary.sum_t, static_cast<unsigned long long>(shadow_ref[0].hits),
+                    static_cast<unsigned long long>(shadow_ref[1].hits), static_cast<unsigned long long>(robust_shadow.hits));
         std::printf("  builds (child process each):");
         for (std::size_t ti = 0; ti < opt.threads.size(); ++ti)
             std::printf(" %d thr: isin %.1f ms (cpu/wall %.2f), Embree %.1f ms (cpu/wall %.2f);", opt.threads[ti],
