@@ -624,15 +624,28 @@ private:
 #if ISIN_VECTOR_EXTENSIONS
         if constexpr (sizeof(T) == sizeof(float)) return hit_block_lanes(b, r, best);
 #endif
+        // One triangle at a time: intersect_watertight's arithmetic (WBW §3) with the ray's shear
+        // set up once (prepare_shear) and the triangles known to be non-degenerate.
         bool found = false;
         for (int k = 0; k < 8; ++k) {
             if (b.primitive[k] == empty_child) break;
-            const Triangle<T> tri{{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]},
-                                  {b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]},
-                                  {b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]}};
-            const Hit<T> h = intersect_watertight(Ray<T>{{r.org[0], r.org[1], r.org[2]}, r.dir}, tri);
-            if (!(h.t < best.t)) continue;
-            best.t = h.t, best.u = h.u, best.v = h.v, best.primitive = b.primitive[k];
+            T x[3], y[3], z[3]; // sheared vertices relative to the origin
+            for (int v = 0; v < 3; ++v) {
+                const T pz = b.v[v][r.kz][k] - r.org[r.kz];
+                x[v] = (b.v[v][r.kx][k] - r.org[r.kx]) - r.Sx * pz; // WBW: Ax = A[kx] − Sx·A[kz]
+                y[v] = (b.v[v][r.ky][k] - r.org[r.ky]) - r.Sy * pz;
+                z[v] = r.Sz * pz;
+            }
+            const T U = difference_of_products(x[2], y[1], y[2], x[1]); // WBW: exact signs
+            const T V = difference_of_products(x[0], y[2], y[0], x[2]);
+            const T W = difference_of_products(x[1], y[0], y[1], x[0]);
+            if ((U < T(0) || V < T(0) || W < T(0)) && (U > T(0) || V > T(0) || W > T(0))) continue;
+            const T det = U + V + W;
+            if (!(det != T(0))) continue;
+            const T inv_det = T(1) / det;
+            const T t = (U * z[0] + V * z[1] + W * z[2]) * inv_det;
+            if (!(t > T(0)) || !(t < best.t)) continue;
+            best.t = t, best.u = V * inv_det, best.v = W * inv_det, best.primitive = b.primitive[k];
             found = true;
         }
         return found;
