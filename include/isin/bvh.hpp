@@ -270,11 +270,11 @@ private:
         triangles_ = nullptr;
     }
 
-    // Runs f(part, begin, end) over [0, n) cut into up to `threads` parts, part 0 on this
-    // thread. Below 32768 items, or if a thread cannot be started, the work stays here.
+    // Runs f(part, begin, end) over [0, n) cut into up to `threads` parts of at least 32768
+    // items, part 0 on this thread; if a thread cannot be started, its part runs here too.
     template <class F>
     static void parallel_chunks(std::size_t n, int threads, const F& f) {
-        const std::size_t parts = n < 32768 ? 1 : std::size_t(threads);
+        const std::size_t parts = std::max<std::size_t>(1, std::min(std::size_t(threads), n / 32768));
         const std::size_t chunk = (n + parts - 1) / std::max<std::size_t>(parts, 1);
         std::vector<std::thread> workers;
         std::size_t next = 1; // the first part not handed to a worker
