@@ -485,8 +485,9 @@ private:
         // the exit distance comes out no smaller than the exact one, so rounding never drops a
         // box that the ray touches and the traversal stays as watertight as the triangle test.
         T inv_far[3];
-        // o·inv (entries) and o·inv_far (exits), lowered / raised by 4ε|·|, more than their own
-        // rounding can move a distance computed as p·inv − o·inv in one FMA.
+        // o·inv raised by 4ε|o·inv| (entries come out no later) and o·inv_far lowered by
+        // 4ε|o·inv_far| (exits no earlier): more than their own rounding can move a distance
+        // computed as p·inv − o·inv in one FMA.
         T org_inv_near[3], org_inv_far[3];
         Vertex<T> dir;
         // byte offsets in a Node of the entry and exit planes of each axis (lo or hi, by sign)
