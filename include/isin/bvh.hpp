@@ -621,6 +621,7 @@ private:
     static bool hit_block(const Block& b, const RayData& r, BvhHit<T>& best) noexcept {
 #if defined(__AVX2__) && defined(__FMA__)
         if constexpr (sizeof(T) == sizeof(float)) return hit_block_avx2(b, r, best);
+        else return hit_block_avx2_double(b, r, best);
 #endif
 #if ISIN_VECTOR_EXTENSIONS
         if constexpr (sizeof(T) == sizeof(float)) return hit_block_lanes(b, r, best);
@@ -702,6 +703,57 @@ private:
         best.v = vv[k] / dv[k];
         best.primitive = b.primitive[k];
         return true;
+    }
+#endif
+
+#if defined(__AVX2__) && defined(__FMA__)
+    // a·b − c·d on 4 double lanes, sign exact (as difference_of_products8).
+    static __m256d difference_of_products4(__m256d a, __m256d b, __m256d c, __m256d d) noexcept {
+        const __m256d cd = _mm256_mul_pd(c, d);
+        const __m256d error = _mm256_fmsub_pd(c, d, cd); // c·d − cd, exact
+        return _mm256_sub_pd(_mm256_fmsub_pd(a, b, cd), error);
+    }
+
+    // The watertight test on the 8 double lanes of a block as two halves of 4 (AVX2 and FMA),
+    // as hit_block_avx2; a half whose first lane is padding is skipped.
+    static bool hit_block_avx2_double(const Block& b, const RayData& r, BvhHit<T>& best) noexcept {
+        const __m256d ox = _mm256_set1_pd(double(r.org[r.kx])), oy = _mm256_set1_pd(double(r.org[r.ky]));
+        const __m256d oz = _mm256_set1_pd(double(r.org[r.kz]));
+        const __m256d Sx = _mm256_set1_pd(double(r.Sx)), Sy = _mm256_set1_pd(double(r.Sy));
+        const __m256d zero = _mm256_setzero_pd();
+        bool found = false;
+        for (int half = 0; half < 8 && b.primitive[half] != empty_child; half += 4) {
+            __m256d x[3], y[3], pz[3];
+            for (int v = 0; v < 3; ++v) {
+                const double* lanes[3] = {b.v[v][r.kx] + half, b.v[v][r.ky] + half, b.v[v][r.kz] + half};
+                pz[v] = _mm256_sub_pd(_mm256_load_pd(lanes[2]), oz);
+                x[v] = _mm256_fnmadd_pd(Sx, pz[v], _mm256_sub_pd(_mm256_load_pd(lanes[0]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+                y[v] = _mm256_fnmadd_pd(Sy, pz[v], _mm256_sub_pd(_mm256_load_pd(lanes[1]), oy));
+            }
+            const __m256d U = difference_of_products4(x[2], y[1], y[2], x[1]); // WBW: U = Cx·By − Cy·Bx
+            const __m256d V = difference_of_products4(x[0], y[2], y[0], x[2]); // WBW: V = Ax·Cy − Ay·Cx
+            const __m256d W = difference_of_products4(x[1], y[0], y[1], x[0]); // WBW: W = Bx·Ay − By·Ax
+            const __m256d lowest = _mm256_min_pd(_mm256_min_pd(U, V), W), highest = _mm256_max_pd(_mm256_max_pd(U, V), W);
+            const __m256d det = _mm256_add_pd(_mm256_add_pd(U, V), W);
+            __m256d ok = _mm256_and_pd(_mm256_or_pd(_mm256_cmp_pd(lowest, zero, _CMP_GE_OQ), _mm256_cmp_pd(highest, zero, _CMP_LE_OQ)),
+                                       _mm256_cmp_pd(det, zero, _CMP_NEQ_OQ));
+            if (_mm256_testz_pd(ok, ok)) continue;
+            const __m256d t_scaled = _mm256_mul_pd(_mm256_set1_pd(double(r.Sz)),
+                                                   _mm256_fmadd_pd(W, pz[2], _mm256_fmadd_pd(V, pz[1], _mm256_mul_pd(U, pz[0]))));
+            const __m256d t = _mm256_div_pd(t_scaled, det);
+            ok = _mm256_and_pd(ok, _mm256_and_pd(_mm256_cmp_pd(t, zero, _CMP_GT_OQ), _mm256_cmp_pd(t, _mm256_set1_pd(double(best.t)), _CMP_LT_OQ)));
+            const unsigned lanes = unsigned(_mm256_movemask_pd(ok));
+            if (!lanes) continue;
+            alignas(32) double tv[4], uv[4], vv[4], dv[4];
+            _mm256_store_pd(tv, t), _mm256_store_pd(uv, V), _mm256_store_pd(vv, W), _mm256_store_pd(dv, det);
+            int k = -1;
+            for (int l = 0; l < 4; ++l)
+                if (((lanes >> l) & 1u) && (k < 0 || tv[l] < tv[k])) k = l;
+            best.t = T(tv[k]), best.u = T(uv[k] / dv[k]), best.v = T(vv[k] / dv[k]);
+            best.primitive = b.primitive[half + k];
+            found = true;
+        }
+        return found;
     }
 #endif
 
