@@ -492,9 +492,7 @@ private:
         Vertex<T> dir;
         // byte offsets in a Node of the entry and exit planes of each axis (lo or hi, by sign)
         std::size_t near_plane[3], far_plane[3];
-        // watertight shear (WBW §3)
-        int kx, ky, kz;
-        T Sx, Sy, Sz;
+        detail::WatertightShear<T> shear; // set when the ray reaches its first leaf
         bool ok;
     };
 
@@ -527,21 +525,6 @@ private:
             r.far_plane[a] = near_is_lo ? hi : lo;
         }
         return r;
-    }
-
-    // The leaves' part of the set-up, done when a ray reaches its first leaf (most rays of a
-    // frame that miss never do). WBW §3: kz the axis of the largest |d|, kx and ky the next
-    // two, swapped when d[kz] < 0 so that the triangles' winding is kept.
-    static void prepare_shear(RayData& r) noexcept {
-        const Vertex<T>& d = r.dir;
-        const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
-        const int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
-        const int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
-        const T dz = component(d, kz);
-        const bool flip = dz < T(0);
-        r.kz = kz, r.kx = flip ? ky : kx, r.ky = flip ? kx : ky;
-        r.Sz = T(1) / dz;
-        r.Sx = component(d, r.kx) / dz, r.Sy = component(d, r.ky) / dz;
     }
 
     // The 8 lanes of a plane of `n` at byte `offset` (RayData::near_plane, far_plane).
@@ -626,28 +609,17 @@ private:
 #if ISIN_VECTOR_EXTENSIONS
         if constexpr (sizeof(T) == sizeof(float)) return hit_block_lanes(b, r, best);
 #endif
-        // One triangle at a time: intersect_watertight's arithmetic (WBW §3) with the ray's shear
-        // set up once (prepare_shear) and the triangles known to be non-degenerate.
+        // One triangle at a time: intersect_watertight's per-triangle part with the ray's shear
+        // set up once per ray; the build left degenerate triangles out.
         bool found = false;
+        const Vertex<T> o{r.org[0], r.org[1], r.org[2]};
         for (int k = 0; k < 8; ++k) {
             if (b.primitive[k] == empty_child) break;
-            T x[3], y[3], z[3]; // sheared vertices relative to the origin
-            for (int v = 0; v < 3; ++v) {
-                const T pz = b.v[v][r.kz][k] - r.org[r.kz];
-                x[v] = (b.v[v][r.kx][k] - r.org[r.kx]) - r.Sx * pz; // WBW: Ax = A[kx] − Sx·A[kz]
-                y[v] = (b.v[v][r.ky][k] - r.org[r.ky]) - r.Sy * pz;
-                z[v] = r.Sz * pz;
-            }
-            const T U = difference_of_products(x[2], y[1], y[2], x[1]); // WBW: exact signs
-            const T V = difference_of_products(x[0], y[2], y[0], x[2]);
-            const T W = difference_of_products(x[1], y[0], y[1], x[0]);
-            if ((U < T(0) || V < T(0) || W < T(0)) && (U > T(0) || V > T(0) || W > T(0))) continue;
-            const T det = U + V + W;
-            if (!(det != T(0))) continue;
-            const T inv_det = T(1) / det;
-            const T t = (U * z[0] + V * z[1] + W * z[2]) * inv_det;
-            if (!(t > T(0)) || !(t < best.t)) continue;
-            best.t = t, best.u = V * inv_det, best.v = W * inv_det, best.primitive = b.primitive[k];
+            Vertex<T> p[3]; // the vertices relative to the origin
+            for (int v = 0; v < 3; ++v) p[v] = Vertex<T>{b.v[v][0][k], b.v[v][1][k], b.v[v][2][k]} - o;
+            const Hit<T> h = detail::intersect_sheared(p[0], p[1], p[2], r.shear, false);
+            if (!(h.t < best.t)) continue;
+            best.t = h.t, best.u = h.u, best.v = h.v, best.primitive = b.primitive[k];
             found = true;
         }
         return found;
@@ -665,14 +637,14 @@ private:
     // The watertight test on 8 float lanes with AVX2 and FMA (WBW §3). U, V, W have exact signs
     // (difference_of_products8), so the test stays watertight; padding lanes have det = 0.
     static bool hit_block_avx2(const Block& b, const RayData& r, BvhHit<T>& best) noexcept {
-        const __m256 ox = _mm256_set1_ps(float(r.org[r.kx])), oy = _mm256_set1_ps(float(r.org[r.ky]));
-        const __m256 oz = _mm256_set1_ps(float(r.org[r.kz]));
-        const __m256 Sx = _mm256_set1_ps(float(r.Sx)), Sy = _mm256_set1_ps(float(r.Sy));
+        const __m256 ox = _mm256_set1_ps(float(r.org[r.shear.kx])), oy = _mm256_set1_ps(float(r.org[r.shear.ky]));
+        const __m256 oz = _mm256_set1_ps(float(r.org[r.shear.kz]));
+        const __m256 Sx = _mm256_set1_ps(float(r.shear.Sx)), Sy = _mm256_set1_ps(float(r.shear.Sy));
         __m256 x[3], y[3], pz[3];
         for (int v = 0; v < 3; ++v) {
-            pz[v] = _mm256_sub_ps(_mm256_load_ps(b.v[v][r.kz]), oz);
-            x[v] = _mm256_fnmadd_ps(Sx, pz[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
-            y[v] = _mm256_fnmadd_ps(Sy, pz[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.ky]), oy));
+            pz[v] = _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kz]), oz);
+            x[v] = _mm256_fnmadd_ps(Sx, pz[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+            y[v] = _mm256_fnmadd_ps(Sy, pz[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.ky]), oy));
         }
         const __m256 U = difference_of_products8(x[2], y[1], y[2], x[1]);  // WBW: U = Cx·By − Cy·Bx
         const __m256 V = difference_of_products8(x[0], y[2], y[0], x[2]);  // WBW: V = Ax·Cy − Ay·Cx
@@ -684,7 +656,7 @@ private:
         __m256 ok = _mm256_and_ps(_mm256_or_ps(_mm256_cmp_ps(lowest, zero, _CMP_GE_OQ), _mm256_cmp_ps(highest, zero, _CMP_LE_OQ)),
                                   _mm256_cmp_ps(det, zero, _CMP_NEQ_OQ));
         if (_mm256_testz_ps(ok, ok)) return false; // most blocks end here, before the division
-        const __m256 Sz = _mm256_set1_ps(float(r.Sz));
+        const __m256 Sz = _mm256_set1_ps(float(r.shear.Sz));
         const __m256 t_scaled = _mm256_mul_ps(Sz, _mm256_fmadd_ps(W, pz[2], _mm256_fmadd_ps(V, pz[1], _mm256_mul_ps(U, pz[0]))));
         const __m256 t = _mm256_div_ps(t_scaled, det);
         ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(t, zero, _CMP_GT_OQ), _mm256_cmp_ps(t, _mm256_set1_ps(float(best.t)), _CMP_LT_OQ)));
@@ -717,15 +689,15 @@ private:
     // The watertight test on the 8 double lanes of a block as two halves of 4 (AVX2 and FMA),
     // as hit_block_avx2; a half whose first lane is padding is skipped.
     static bool hit_block_avx2_double(const Block& b, const RayData& r, BvhHit<T>& best) noexcept {
-        const __m256d ox = _mm256_set1_pd(double(r.org[r.kx])), oy = _mm256_set1_pd(double(r.org[r.ky]));
-        const __m256d oz = _mm256_set1_pd(double(r.org[r.kz]));
-        const __m256d Sx = _mm256_set1_pd(double(r.Sx)), Sy = _mm256_set1_pd(double(r.Sy));
+        const __m256d ox = _mm256_set1_pd(double(r.org[r.shear.kx])), oy = _mm256_set1_pd(double(r.org[r.shear.ky]));
+        const __m256d oz = _mm256_set1_pd(double(r.org[r.shear.kz]));
+        const __m256d Sx = _mm256_set1_pd(double(r.shear.Sx)), Sy = _mm256_set1_pd(double(r.shear.Sy));
         const __m256d zero = _mm256_setzero_pd();
         bool found = false;
         for (int half = 0; half < 8 && b.primitive[half] != empty_child; half += 4) {
             __m256d x[3], y[3], pz[3];
             for (int v = 0; v < 3; ++v) {
-                const double* lanes[3] = {b.v[v][r.kx] + half, b.v[v][r.ky] + half, b.v[v][r.kz] + half};
+                const double* lanes[3] = {b.v[v][r.shear.kx] + half, b.v[v][r.shear.ky] + half, b.v[v][r.shear.kz] + half};
                 pz[v] = _mm256_sub_pd(_mm256_load_pd(lanes[2]), oz);
                 x[v] = _mm256_fnmadd_pd(Sx, pz[v], _mm256_sub_pd(_mm256_load_pd(lanes[0]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
                 y[v] = _mm256_fnmadd_pd(Sy, pz[v], _mm256_sub_pd(_mm256_load_pd(lanes[1]), oy));
@@ -738,7 +710,7 @@ private:
             __m256d ok = _mm256_and_pd(_mm256_or_pd(_mm256_cmp_pd(lowest, zero, _CMP_GE_OQ), _mm256_cmp_pd(highest, zero, _CMP_LE_OQ)),
                                        _mm256_cmp_pd(det, zero, _CMP_NEQ_OQ));
             if (_mm256_testz_pd(ok, ok)) continue;
-            const __m256d t_scaled = _mm256_mul_pd(_mm256_set1_pd(double(r.Sz)),
+            const __m256d t_scaled = _mm256_mul_pd(_mm256_set1_pd(double(r.shear.Sz)),
                                                    _mm256_fmadd_pd(W, pz[2], _mm256_fmadd_pd(V, pz[1], _mm256_mul_pd(U, pz[0]))));
             const __m256d t = _mm256_div_pd(t_scaled, det);
             ok = _mm256_and_pd(ok, _mm256_and_pd(_mm256_cmp_pd(t, zero, _CMP_GT_OQ), _mm256_cmp_pd(t, _mm256_set1_pd(double(best.t)), _CMP_LT_OQ)));
@@ -767,13 +739,13 @@ private:
         V x[3], y[3], z[3]; // sheared vertices relative to the origin: x, y in the ray's frame, z along it
         for (int v = 0; v < 3; ++v) {
             V px, py, pz;
-            std::memcpy(&px, b.v[v][r.kx], sizeof px);
-            std::memcpy(&py, b.v[v][r.ky], sizeof py);
-            std::memcpy(&pz, b.v[v][r.kz], sizeof pz);
-            px -= float(r.org[r.kx]), py -= float(r.org[r.ky]), pz -= float(r.org[r.kz]);
-            x[v] = px - float(r.Sx) * pz;           // WBW: Ax = A[kx] − Sx·A[kz]
-            y[v] = py - float(r.Sy) * pz;
-            z[v] = float(r.Sz) * pz;
+            std::memcpy(&px, b.v[v][r.shear.kx], sizeof px);
+            std::memcpy(&py, b.v[v][r.shear.ky], sizeof py);
+            std::memcpy(&pz, b.v[v][r.shear.kz], sizeof pz);
+            px -= float(r.org[r.shear.kx]), py -= float(r.org[r.shear.ky]), pz -= float(r.org[r.shear.kz]);
+            x[v] = px - float(r.shear.Sx) * pz;           // WBW: Ax = A[kx] − Sx·A[kz]
+            y[v] = py - float(r.shear.Sy) * pz;
+            z[v] = float(r.shear.Sz) * pz;
         }
         const D X0 = __builtin_convertvector(x[0], D), Y0 = __builtin_convertvector(y[0], D);
         const D X1 = __builtin_convertvector(x[1], D), Y1 = __builtin_convertvector(y[1], D);
@@ -819,7 +791,9 @@ private:
         bool hit = false;
         for (;;) {
             if (ref & leaf_bit) {
-                if (!sheared) prepare_shear(r), sheared = true;
+                // The leaves' set-up, the watertight shear, only for rays that reach a leaf: most
+                // rays of a frame that miss never do (prepare has checked the direction).
+                if (!sheared) r.shear.set(r.dir), sheared = true;
                 if (hit_block(blocks_[ref & ~leaf_bit], r, best)) {
                     hit = true;
                     if (any_hit) return true;

@@ -157,30 +157,40 @@ template <class T>
     return Hit<T>::at(t, u, v);
 }
 
-/// Watertight ray–triangle test (Woop, Benthin & Wald, "Watertight Ray/Triangle Intersection",
-/// JCGT 2(1), 2013), beyond the note: the ray is sheared so that it runs along +z, and the three
-/// 2D edge functions U, V, W of the sheared vertices decide inside/outside. Each is computed by
-/// `difference_of_products`, so its sign is exact: a ray through an edge shared by two triangles
-/// is seen on the same side of it by both, and a closed mesh has no cracks. Barycentrics u = V/det
-/// (weight of V1), v = W/det (weight of V2). Two-sided unless `cull_backfaces`.
+namespace detail {
+
+/// The watertight test's per-ray part (WBW §3): kz is the dominant axis of the direction; kx, ky
+/// follow it cyclically, swapped when d[kz] < 0 so that the winding (and with it the sign of U,
+/// V, W) is kept; S shears the ray onto +z.
 template <class T>
-[[nodiscard]] inline Hit<T> intersect_watertight(const Ray<T>& ray, const Triangle<T>& tri,
-                                                 bool cull_backfaces = false) noexcept {
-    const Vertex<T>& d = ray.direction;
-    // Per ray: kz is the dominant axis of the direction; kx, ky follow it cyclically, swapped
-    // when d[kz] < 0 so that the winding (and with it the sign of U, V, W) is kept (WBW §3).
-    const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
-    const int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
-    int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
-    const T dz = component(d, kz);
-    if (!(dz != T(0))) return Hit<T>::miss(); // zero or NaN direction
-    if (dz < T(0)) std::swap(kx, ky);
-    const T Sx = component(d, kx) / dz, Sy = component(d, ky) / dz, Sz = T(1) / dz; // WBW: shear
-    // Per triangle: vertices relative to the origin, sheared onto the ray's frame.
-    const Vertex<T> A = tri.v0 - ray.origin, B = tri.v1 - ray.origin, C = tri.v2 - ray.origin;
-    const T Ax = component(A, kx) - Sx * component(A, kz), Ay = component(A, ky) - Sy * component(A, kz);
-    const T Bx = component(B, kx) - Sx * component(B, kz), By = component(B, ky) - Sy * component(B, kz);
-    const T Cx = component(C, kx) - Sx * component(C, kz), Cy = component(C, ky) - Sy * component(C, kz);
+struct WatertightShear {
+    // Not initialised here: a Bvh makes one per ray and sets it only if the ray reaches a leaf.
+    int kx, ky, kz;
+    T Sx, Sy, Sz;
+
+    /// Sets the shear for direction d; false (and no shear) for a zero or NaN direction.
+    bool set(const Vertex<T>& d) noexcept {
+        const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
+        kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+        kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
+        const T dz = component(d, kz);
+        if (!(dz != T(0))) return false; // zero or NaN direction
+        if (dz < T(0)) std::swap(kx, ky);
+        Sx = component(d, kx) / dz, Sy = component(d, ky) / dz, Sz = T(1) / dz; // WBW: shear
+        return true;
+    }
+};
+
+/// The watertight test's per-triangle part (WBW §3) for vertices A, B, C relative to the ray's
+/// origin; the caller rejects degenerate triangles (intersect_watertight on the hit path only,
+/// Bvh at build time).
+template <class T>
+[[nodiscard]] inline Hit<T> intersect_sheared(const Vertex<T>& A, const Vertex<T>& B, const Vertex<T>& C,
+                                              const WatertightShear<T>& s, bool cull_backfaces) noexcept {
+    const int kx = s.kx, ky = s.ky, kz = s.kz;
+    const T Ax = component(A, kx) - s.Sx * component(A, kz), Ay = component(A, ky) - s.Sy * component(A, kz);
+    const T Bx = component(B, kx) - s.Sx * component(B, kz), By = component(B, ky) - s.Sy * component(B, kz);
+    const T Cx = component(C, kx) - s.Sx * component(C, kz), Cy = component(C, ky) - s.Sy * component(C, kz);
     const T U = difference_of_products(Cx, By, Cy, Bx); // WBW: edge functions, exact sign
     const T V = difference_of_products(Ax, Cy, Ay, Cx);
     const T W = difference_of_products(Bx, Ay, By, Ax);
@@ -190,14 +200,34 @@ template <class T>
     if (cull_backfaces ? any_negative : (any_negative && any_positive)) return Hit<T>::miss();
     const T det = U + V + W;
     if (!(det != T(0))) return Hit<T>::miss();
-    const T Az = Sz * component(A, kz), Bz = Sz * component(B, kz), Cz = Sz * component(C, kz);
+    const T Az = s.Sz * component(A, kz), Bz = s.Sz * component(B, kz), Cz = s.Sz * component(C, kz);
     const T t_scaled = U * Az + V * Bz + W * Cz;        // WBW: t·det
     const T inv_det = T(1) / det;
     const T t = t_scaled * inv_det;
     if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
+    return Hit<T>::at(t, V * inv_det, W * inv_det);
+}
+
+} // namespace detail
+
+/// Watertight ray–triangle test (Woop, Benthin & Wald, "Watertight Ray/Triangle Intersection",
+/// JCGT 2(1), 2013), beyond the note: the ray is sheared so that it runs along +z, and the three
+/// 2D edge functions U, V, W of the sheared vertices decide inside/outside. Each is computed by
+/// `difference_of_products`, so its sign is exact: a ray through an edge shared by two triangles
+/// is seen on the same side of it by both, and a closed mesh has no cracks. Barycentrics u = V/det
+/// (weight of V1), v = W/det (weight of V2). Two-sided unless `cull_backfaces`.
+template <class T>
+[[nodiscard]] inline Hit<T> intersect_watertight(const Ray<T>& ray, const Triangle<T>& tri,
+                                                 bool cull_backfaces = false) noexcept {
+    detail::WatertightShear<T> shear;
+    if (!shear.set(ray.direction)) return Hit<T>::miss();
+    // Per triangle: vertices relative to the origin, sheared onto the ray's frame.
+    const Hit<T> h = detail::intersect_sheared(tri.v0 - ray.origin, tri.v1 - ray.origin, tri.v2 - ray.origin, shear,
+                                               cull_backfaces);
+    if (!h) return h;
     const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
     if (detail::is_degenerate(e1, e2, cross(e1, e2))) return Hit<T>::miss(); // hit path only
-    return Hit<T>::at(t, V * inv_det, W * inv_det);
+    return h;
 }
 
 } // namespace isin
