@@ -51,6 +51,7 @@ int main(int argc, char** argv) {
         else fail("one mesh at a time");
     }
     if (mesh_path.empty()) fail("no mesh given");
+    example::check_output(argv[0], output, width, height, usage);
     try {
         const auto triangles = isin::load_mesh<float>(mesh_path);
         if (triangles.empty()) throw std::runtime_error("'" + mesh_path + "' has no triangles");

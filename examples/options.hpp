@@ -4,7 +4,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <stdexcept>
 #include <string>
+
+#include <isin/image.hpp>
 
 namespace example {
 
@@ -38,14 +41,26 @@ inline int integer_option(int& i, int argc, char** argv, int lo, int hi, const c
     return to_integer(string_option(i, argc, argv, usage), option, lo, hi, argv[0], usage);
 }
 
+/// Fails (status 2) at once if a width × height image cannot be written to `path` (unknown
+/// extension, too large for the PNG encoder), rather than after the rendering.
+inline void check_output(const char* program, const std::string& path, int width, int height, const char* usage) {
+    try {
+        isin::check_image_output(path, width, height);
+    } catch (const std::invalid_argument& e) {
+        fail(program, e.what(), usage);
+    }
+}
+
 struct Options {
     int width = 800, height = 450, threads = 0, samples = 1;
     std::string output;
 };
 
 /// Parses --width, --height, --threads, --samples, --output and --help; `usage` is printed for
-/// --help (to stdout, status 0) and on errors (stderr, status 2).
-inline Options parse(int argc, char** argv, const char* usage, const std::string& default_output) {
+/// --help (to stdout, status 0) and on errors (stderr, status 2). The output must take an image
+/// `width_factor`·width × height (check_output).
+inline Options parse(int argc, char** argv, const char* usage, const std::string& default_output,
+                     int width_factor = 1) {
     Options o;
     o.output = default_output;
     for (int i = 1; i < argc; ++i) {
@@ -60,6 +75,7 @@ inline Options parse(int argc, char** argv, const char* usage, const std::string
         else if (a == "--output" || a == "-o") o.output = string_option(i, argc, argv, usage);
         else fail(argv[0], "unknown option '" + a + "'", usage);
     }
+    check_output(argv[0], o.output, width_factor * o.width, o.height, usage);
     return o;
 }
 

@@ -231,6 +231,7 @@ int main(int argc, char** argv) {
             frames = example::to_integer(frames_value, "--frames", 1, 100000, "walk", usage);
         }
     }
+    if (scripted && !benchmark) example::check_output("walk", output, width ? width : 320, height ? height : 180, usage);
     const auto scene = note_scene::make<float>();
     try {
         if (benchmark) {

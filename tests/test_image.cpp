@@ -338,3 +338,151 @@ TEST_CASE("read_image: missing, garbage, truncated or directory paths throw nami
     CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir.path.string()); }),
                    dir.path.string()));
 }
+
+// ---- hardening: hostile files, limits, in-memory decoding, names ----------------------------------
+
+namespace {
+
+std::string repro(const std::string& name) { return std::string(ISIN_TEST_DATA_DIR) + "/repro/" + name; }
+
+/// The bytes of a PNG of `image` made by write_png.
+std::vector<unsigned char> png_of(const isin::Image& image, const TempDir& dir) {
+    isin::write_png(image, dir / "made.png");
+    return file_bytes(dir / "made.png");
+}
+
+bool same_pixels(const isin::Image& a, const isin::Image& b) {
+    return a.width() == b.width() && a.height() == b.height() &&
+           std::equal(a.pixels().begin(), a.pixels().end(), b.pixels().begin(),
+                      [](const isin::Rgb8& p, const isin::Rgb8& q) { return p.r == q.r && p.g == q.g && p.b == q.b; });
+}
+
+} // namespace
+
+#if ISIN_HAVE_STB
+TEST_CASE("read_image: the hardening reproducers are refused with a reason, none decodes past its data") {
+    // D2: stb 2.27 wrote past a Huffman table (code counts summing to 289), used Huffman and
+    // quantisation tables the file never defined (uninitialised memory: a crash after a primer,
+    // different pixels on every run). D3: a 69-byte PNG asked for 805 MB, a 665-byte JPEG decoded
+    // as 16384² invented pixels. Each is now refused before stb sees it.
+    const struct {
+        const char* file;
+        const char* why;
+    } cases[] = {{"jpeg_dht_sum_over_256.jpg", "more than 256"},
+                 {"jpeg_uninit_huffman.jpg", "Huffman table that is not defined"},
+                 {"jpeg_no_dqt_uninitialized.jpg", "quantisation table that is not defined"},
+                 {"jpeg_16384x16384_from_665B.jpg", "cannot code"},
+                 {"png_16384x16384_69B.png", "cannot hold"},
+                 {"png_memcpy_null_len0.png", "truncated PNG"}};
+    (void)isin::read_image(repro("jpeg_uninit_huffman_primer.jpg")); // a valid file that left stale tables behind
+    for (const auto& c : cases) {
+        CAPTURE(std::string(c.file));
+        const std::string why = thrown<std::runtime_error>([&] { (void)isin::read_image(repro(c.file)); });
+        CHECK(contains(why, c.file));
+        CHECK(contains(why, c.why));
+    }
+}
+
+TEST_CASE("read_image: a pixel budget from the header, before decoding (ReadLimits::max_pixels)") {
+    TempDir dir{"isin-test-image-"};
+    isin::write_png(gradient(40, 30), dir / "a.png");
+    isin::ReadLimits small;
+    small.max_pixels = 40 * 30 - 1;
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir / "a.png", small); }), "max_pixels"));
+    small.max_pixels = 40 * 30;
+    CHECK(isin::read_image(dir / "a.png", small).width() == 40);
+    put_file(dir / "a.ppm", "P6\n40 30\n255\n" + std::string(40 * 30 * 3, 'x'));
+    small.max_pixels = 100;
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir / "a.ppm", small); }), "max_pixels"));
+}
+
+TEST_CASE("read_image: truncated PNG and JPEG data are errors, not images padded with zeros") {
+    TempDir dir{"isin-test-image-"};
+    const std::vector<unsigned char> png = png_of(gradient(64, 64), dir);
+    const std::string jpeg(std::begin(flat_jpeg), std::end(flat_jpeg));
+    for (std::size_t cut : {std::size_t(20), png.size() / 2, png.size() - 12, png.size() - 1}) {
+        CAPTURE(cut);
+        CHECK_THROWS_AS((void)isin::read_image_from_memory(png.data(), cut), std::runtime_error);
+    }
+    for (std::size_t cut : {std::size_t(4), jpeg.size() / 2, jpeg.size() - 2, jpeg.size() - 1}) {
+        CAPTURE(cut);
+        CHECK_THROWS_AS((void)isin::read_image_from_memory(jpeg.data(), cut), std::runtime_error);
+    }
+}
+
+TEST_CASE("read_image: a PNG whose first IDAT chunks are empty decodes (stb is given them left out)") {
+    // stb 2.27 copied 0 bytes from a null pointer for an empty first IDAT (undefined behaviour
+    // that UBSan reports); such chunks are legal PNG and carry nothing.
+    TempDir dir{"isin-test-image-"};
+    const isin::Image image = gradient(7, 5);
+    std::vector<unsigned char> png = png_of(image, dir);
+    std::size_t idat = 8;
+    while (idat + 8 <= png.size() && std::string(png.begin() + long(idat) + 4, png.begin() + long(idat) + 8) != "IDAT")
+        idat += 12 + (std::size_t(png[idat]) << 24 | std::size_t(png[idat + 1]) << 16 | std::size_t(png[idat + 2]) << 8 | png[idat + 3]);
+    REQUIRE(idat + 8 <= png.size());
+    const unsigned char empty_idat[12] = {0, 0, 0, 0, 'I', 'D', 'A', 'T', 0x35, 0xaf, 0x06, 0x1e};
+    png.insert(png.begin() + long(idat), std::begin(empty_idat), std::end(empty_idat));
+    png.insert(png.begin() + long(idat), std::begin(empty_idat), std::end(empty_idat));
+    CHECK(same_pixels(isin::read_image_from_memory(png.data(), png.size()), image));
+}
+
+TEST_CASE("read_image_from_memory decodes what read_image decodes, and names its source") {
+    TempDir dir{"isin-test-image-"};
+    const isin::Image image = gradient(9, 4);
+    const std::vector<unsigned char> png = png_of(image, dir);
+    CHECK(same_pixels(isin::read_image_from_memory(png.data(), png.size()), image));
+    isin::write_ppm(image, dir / "a.ppm");
+    const std::vector<unsigned char> ppm = file_bytes(dir / "a.ppm");
+    CHECK(same_pixels(isin::read_image_from_memory(ppm.data(), ppm.size()), image));
+    const std::string jpeg(std::begin(flat_jpeg), std::end(flat_jpeg));
+    put_file(dir / "f.jpg", jpeg);
+    CHECK(same_pixels(isin::read_image_from_memory(jpeg.data(), jpeg.size()), isin::read_image(dir / "f.jpg")));
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image_from_memory("GIF89a", 6, {}, "upload #3"); }),
+                   "'upload #3'"));
+    CHECK_THROWS_AS((void)isin::read_image_from_memory(nullptr, 100), std::runtime_error);
+}
+#endif
+
+#if ISIN_TEST_POSIX
+TEST_CASE("read_image refuses devices, pipes and links to them at once, and files over the size limit") {
+    // D10: reading /dev/zero grew until the OOM killer; a FIFO would block for ever.
+    TempDir dir{"isin-test-image-"};
+    CHECK(contains(thrown<std::runtime_error>([] { (void)isin::read_image("/dev/zero"); }), "not a regular file"));
+    fs::create_symlink("/dev/zero", dir.path / "zero.png");
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir / "zero.png"); }), "not a regular file"));
+    REQUIRE(::mkfifo((dir / "fifo.ppm").c_str(), 0600) == 0);
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir / "fifo.ppm"); }), "not a regular file"));
+    isin::write_ppm(gradient(8, 8), dir / "a.ppm");
+    isin::ReadLimits limits;
+    limits.max_file_bytes = 100; // the file is 8·8·3 + 11 = 203 bytes
+    const std::string why = thrown<std::runtime_error>([&] { (void)isin::read_image(dir / "a.ppm", limits); });
+    CHECK(contains(why, "203 bytes"));
+    CHECK(contains(why, "max_file_bytes"));
+    limits.max_file_bytes = 203;
+    CHECK(isin::read_image(dir / "a.ppm", limits).width() == 8);
+}
+
+TEST_CASE("writing works for every name the file system takes: a 255-byte name, no temporary left") {
+    // D9: the temporary was "<path>.tmp-<pid>-<n>", longer than the name, so names of 244–255
+    // bytes failed with "File name too long".
+    TempDir dir{"isin-test-image-"};
+    for (std::size_t length : {std::size_t(5), std::size_t(244), std::size_t(255)}) {
+        const std::string name = std::string(length - 4, 'n') + ".png";
+        isin::write_image(gradient(3, 3), dir / name);
+        CHECK(same_pixels(isin::read_image(dir / name), gradient(3, 3)));
+        const std::string ppm = std::string(length - 4, 'p') + ".ppm";
+        isin::write_ppm(gradient(3, 3), dir / ppm);
+        CHECK(fs::file_size(dir / ppm) == 3 * 3 * 3 + 11);
+    }
+    CHECK(listing(dir.path).size() == 6);
+}
+#endif
+
+TEST_CASE("check_image_output: the format and size write_image would refuse, before any rendering") {
+    // D11: a 32768×10923 render ran two minutes, then failed in the PNG encoder.
+    CHECK_NOTHROW(isin::check_image_output("a.png", 32768, 10922));
+    CHECK(contains(thrown<std::invalid_argument>([] { isin::check_image_output("a.png", 32768, 10923); }),
+                   "too large for the PNG encoder"));
+    CHECK_NOTHROW(isin::check_image_output("a.PPM", 32768, 32768));
+    CHECK(contains(thrown<std::invalid_argument>([] { isin::check_image_output("a.gif", 10, 10); }), "unknown extension"));
+}

@@ -571,3 +571,65 @@ TEST_CASE("PLY: NaN coordinates, short faces and malformed numbers throw with th
         CHECK(w == doctest::Contains("NaN"));
     }
 }
+
+// ---- hardening -----------------------------------------------------------------------------------
+
+#if ISIN_HAVE_TINYOBJLOADER
+TEST_CASE("OBJ: exponents tinyobjloader's guard lets overflow are refused, on v, vn and vt lines (D8)") {
+    // Its exponent accumulates in an int guarded one step too late: "1e-2147483648" overflowed
+    // it (undefined behaviour). isin took the number (it underflows to 0) and did not look at
+    // vn/vt lines at all.
+    const std::string data = ISIN_TEST_DATA_DIR;
+    CHECK(str(thrown([&] { (void)isin::load_obj<float>(data + "/repro/obj_exponent_overflow.obj"); })) ==
+          doctest::Contains("line 1: exponent"));
+    CHECK(str(thrown([&] { (void)isin::load_obj<double>(data + "/repro/obj_exponent_overflow_fuzzer.obj"); })) ==
+          doctest::Contains("exponent"));
+    TempDir dir{"isin-test-mesh-"};
+    const auto why = [&](const std::string& name, const std::string& text) {
+        return str(thrown([&] { (void)isin::load_obj<float>(dir.put(name, text)); }));
+    };
+    CHECK(why("vn.obj", "v 0 0 0\nvn 0 1e-2147483648 0\n") == doctest::Contains("line 2: exponent"));
+    CHECK(why("vt.obj", "vt 1E+99999999999 0\n") == doctest::Contains("exponent"));
+    CHECK(why("long.obj", "v 0 0 0." + std::string(5000, '1') + "\n") == doctest::Contains("longer than"));
+    CHECK(why("vtindex.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/99999999999 2 3\n") == doctest::Contains("out of range"));
+    CHECK(why("vnindex.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//-99999999999 2 3\n") == doctest::Contains("out of range"));
+    // nine significant exponent digits (and any number of leading zeros) are fine
+    const auto tris = isin::load_obj<float>(dir.put("ok.obj", "v 0 0 1e-000000000000999999999\nvn 0 0 1e-999999999\n"
+                                                                "v 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+    REQUIRE(tris.size() == 1);
+    CHECK(tris[0].v0.z == 0.0f);
+}
+#endif
+
+TEST_CASE_TEMPLATE("load_mesh_from_memory reads what load_mesh reads, naming its source in errors", T, float, double) {
+    TempDir dir{"isin-test-mesh-"};
+    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                            "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    const auto from_file = isin::load_mesh<T>(dir.put("a.ply", ply));
+    const auto from_memory = isin::load_mesh_from_memory<T>(ply.data(), ply.size(), isin::MeshFormat::ply);
+    REQUIRE(from_memory.size() == 1);
+    CHECK(from_memory[0].v1.x == from_file[0].v1.x);
+#if ISIN_HAVE_TINYOBJLOADER
+    const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\n";
+    CHECK(isin::load_mesh_from_memory<T>(obj.data(), obj.size(), isin::MeshFormat::obj).size() == 2);
+    const std::string bad = "v 0 0 0\nf 1 2 3\n";
+    CHECK(str(thrown([&] { (void)isin::load_mesh_from_memory<T>(bad.data(), bad.size(), isin::MeshFormat::obj, "socket 7"); })) ==
+          doctest::Contains("'socket 7': line 2"));
+#endif
+    CHECK(str(thrown([&] { (void)isin::load_mesh_from_memory<T>(nullptr, 10, isin::MeshFormat::ply); })) ==
+          doctest::Contains("not a PLY file"));
+}
+
+#if defined(__unix__) || defined(__APPLE__)
+TEST_CASE("load_mesh refuses devices, pipes and links to them at once, and files over the size limit (D10)") {
+    TempDir dir{"isin-test-mesh-"};
+    fs::create_symlink("/dev/zero", dir.path / "zero.ply");
+    CHECK(str(thrown([&] { (void)isin::load_mesh<float>(dir / "zero.ply"); })) == doctest::Contains("not a regular file"));
+    CHECK(str(thrown([&] { (void)isin::load_ply<float>("/dev/urandom"); })) == doctest::Contains("not a regular file"));
+    const std::string obj = dir.put("a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    isin::ReadLimits limits;
+    limits.max_file_bytes = 10;
+    CHECK(str(thrown([&] { (void)isin::load_mesh<float>(obj, limits); })) == doctest::Contains("max_file_bytes"));
+}
+#endif

@@ -9,12 +9,16 @@
 ///    outside the image through at(): std::out_of_range; anything to do with files (cannot
 ///    open, cannot create, unwritable directory, path is a directory, disk full, undecodable or
 ///    truncated data, stb missing): std::runtime_error.
-///  - Writing is atomic: the whole file is encoded in memory, written to a temporary file next
-///    to the target ("<path>.tmp-<pid>-<n>"), flushed to disk, then renamed onto the target. If
-///    anything fails, the temporary is removed and an existing target is left untouched, so a
-///    file at `path` is either the old one or the complete new one, never a partial one.
-///    Replacing a file gives it default permissions; a symbolic link at `path` is replaced, not
-///    followed.
+///  - Writing is atomic: the whole file is encoded in memory, written to a temporary file in the
+///    target's directory (".isin-<pid>-<n>.tmp", short, so any name the file system accepts for
+///    the target works), flushed to disk, then renamed onto the target. If anything fails, the
+///    temporary is removed and an existing target is left untouched, so a file at `path` is
+///    either the old one or the complete new one, never a partial one. Replacing a file gives it
+///    default permissions; a symbolic link at `path` is replaced, not followed.
+///  - Reading takes regular files only (not devices, pipes or sockets) of at most
+///    ReadLimits::max_file_bytes, and images of at most ReadLimits::max_pixels, checked from the
+///    header before decoding; PNG and JPEG structure is checked before stb sees the data
+///    (detail/image_check.hpp), and truncated data is an error.
 ///  - PNG writing and PNG/JPEG reading need stb (Debian: libstb-dev); without it (ISIN_HAVE_STB
 ///    is 0) they throw std::runtime_error saying so, while PPM reading and writing still work.
 #include <atomic>
@@ -32,13 +36,10 @@
 
 #include "color.hpp"
 #include "detail/file.hpp"
+#include "detail/image_check.hpp"
 #include "detail/stb.hpp"
+#include "read_limits.hpp"
 
-#if defined(__unix__) || defined(__APPLE__)
-#include <unistd.h>
-#elif defined(_WIN32)
-#include <process.h>
-#endif
 
 namespace isin {
 
@@ -103,81 +104,10 @@ namespace detail {
     return std::runtime_error(std::string(who) + ": '" + path + "': " + why);
 }
 
-[[nodiscard]] inline unsigned long process_id() noexcept {
-#if defined(__unix__) || defined(__APPLE__)
-    return static_cast<unsigned long>(::getpid());
-#elif defined(_WIN32)
-    return static_cast<unsigned long>(::_getpid());
-#else
-    return 0;
-#endif
-}
-
-/// A temporary file that is removed unless committed.
-struct TempFile {
-    std::string name;
-    std::FILE* file = nullptr;
-    bool committed = false;
-
-    TempFile() = default;
-    TempFile(const TempFile&) = delete;
-    TempFile& operator=(const TempFile&) = delete;
-    ~TempFile() {
-        if (file) std::fclose(file);
-        if (!committed && !name.empty()) std::remove(name.c_str());
-    }
-};
-
 /// Writes `bytes` to `path` atomically (see the error policy at the top of this header).
-inline void write_file_atomically(const char* who, const std::string& path,
-                                  const std::vector<unsigned char>& bytes) {
-    static std::atomic<unsigned long> counter{0};
-#if defined(_WIN32)
-    const char* mode = "wb";
-#else
-    const char* mode = "wbx"; // exclusive: never reuse somebody else's file
-#endif
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) throw file_error(who, path, "is a directory");
-    TempFile tmp;
-    for (int attempt = 0;; ++attempt) {
-        const std::string candidate = path + ".tmp-" + std::to_string(process_id()) + "-" +
-                                      std::to_string(counter.fetch_add(1));
-        errno = 0;
-        tmp.file = std::fopen(candidate.c_str(), mode);
-        if (tmp.file) {
-            tmp.name = candidate;
-            break;
-        }
-        const int err = errno;
-        if (err != EEXIST || attempt >= 100)
-            throw file_error(who, path, "cannot create the temporary file '" + candidate +
-                                            "': " + errno_text(err));
-    }
-    const auto write_error = [&](int err) {
-        return file_error(who, path, "cannot write '" + tmp.name + "': " + errno_text(err));
-    };
-    if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), tmp.file) != bytes.size())
-        throw write_error(errno);
-    if (std::fflush(tmp.file) != 0) throw write_error(errno);
-#if defined(__unix__) || defined(__APPLE__)
-    if (::fsync(::fileno(tmp.file)) != 0 && errno != EINVAL && errno != EROFS) throw write_error(errno);
-#endif
-    const int closed = std::fclose(tmp.file);
-    const int close_errno = errno;
-    tmp.file = nullptr;
-    if (closed != 0) throw write_error(close_errno);
-    std::filesystem::rename(tmp.name, path, ec);
-    if (ec) throw file_error(who, path, "cannot replace it: " + ec.message());
-    tmp.committed = true;
-}
-
-/// The whole file at `path`; throws std::runtime_error naming `path`.
-[[nodiscard]] inline std::vector<unsigned char> read_file(const char* who, const std::string& path) {
-    std::vector<unsigned char> bytes;
-    const std::string why = read_whole_file(path, bytes);
+inline void write_file(const char* who, const std::string& path, const std::vector<unsigned char>& bytes) {
+    const std::string why = write_file_atomically(path, bytes);
     if (!why.empty()) throw file_error(who, path, why);
-    return bytes;
 }
 
 /// Binary PPM (P6, maxval 255) of `image`.
@@ -195,27 +125,29 @@ inline void write_file_atomically(const char* who, const std::string& path,
 }
 
 /// Decodes a binary PPM (P6, maxval 1…65535, '#' comments in the header); samples are scaled
-/// to 0…255. Throws std::runtime_error naming `path` on malformed or truncated data.
-[[nodiscard]] inline Image decode_ppm(const std::vector<unsigned char>& bytes,
-                                      const std::string& path) {
+/// to 0…255. Throws std::runtime_error naming `name` on malformed or truncated data, or when the
+/// size is beyond limits.max_pixels.
+[[nodiscard]] inline Image decode_ppm(const unsigned char* bytes, std::size_t size, const std::string& name,
+                                      const ReadLimits& limits) {
     const char* who = "isin::read_image";
+    const std::string& path = name;
     std::size_t pos = 2; // after "P6"
     const auto is_space = [](unsigned char c) {
         return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f';
     };
     const auto number = [&](const char* what, long max) -> long {
         for (;;) { // whitespace and comments before the token
-            if (pos < bytes.size() && is_space(bytes[pos])) {
+            if (pos < size && is_space(bytes[pos])) {
                 ++pos;
-            } else if (pos < bytes.size() && bytes[pos] == '#') {
-                while (pos < bytes.size() && bytes[pos] != '\n' && bytes[pos] != '\r') ++pos;
+            } else if (pos < size && bytes[pos] == '#') {
+                while (pos < size && bytes[pos] != '\n' && bytes[pos] != '\r') ++pos;
             } else {
                 break;
             }
         }
         long value = 0;
         const std::size_t start = pos;
-        while (pos < bytes.size() && bytes[pos] >= '0' && bytes[pos] <= '9') {
+        while (pos < size && bytes[pos] >= '0' && bytes[pos] <= '9') {
             value = value * 10 + (bytes[pos] - '0');
             if (value > max)
                 throw file_error(who, path, std::string("PPM ") + what + " is larger than " +
@@ -229,15 +161,17 @@ inline void write_file_atomically(const char* who, const std::string& path,
     const int w = int(number("width", Image::max_side));
     const int h = int(number("height", Image::max_side));
     const long maxval = number("maxval", 65535);
-    if (pos >= bytes.size() || !is_space(bytes[pos]))
+    if (pos >= size || !is_space(bytes[pos]))
         throw file_error(who, path, "malformed PPM header: no whitespace after maxval");
     ++pos;
+    const std::string why = pixel_budget(std::uint64_t(w), std::uint64_t(h), limits);
+    if (!why.empty()) throw file_error(who, path, why);
     const std::size_t sample_size = maxval < 256 ? 1 : 2;
     const std::size_t needed = std::size_t(w) * std::size_t(h) * 3 * sample_size;
-    if (bytes.size() - pos < needed)
+    if (size - pos < needed)
         throw file_error(who, path, "truncated PPM: " + std::to_string(needed) +
                                         " bytes of pixels expected, " +
-                                        std::to_string(bytes.size() - pos) + " found");
+                                        std::to_string(size - pos) + " found");
     Image image(w, h);
     const auto sample = [&]() -> std::uint8_t {
         long s = bytes[pos++];
@@ -258,19 +192,43 @@ inline void write_file_atomically(const char* who, const std::string& path,
 
 /// Writes `image` as a binary PPM (P6, maxval 255), atomically. Throws std::runtime_error.
 inline void write_ppm(const Image& image, const std::string& path) {
-    detail::write_file_atomically("isin::write_ppm", path, detail::encode_ppm(image));
+    detail::write_file("isin::write_ppm", path, detail::encode_ppm(image));
 }
 
+namespace detail {
+
+enum class ImageFormat { png, ppm };
+
+/// The format write_image uses for `path` (by extension, any case); throws std::invalid_argument.
+[[nodiscard]] inline ImageFormat output_format(const char* who, const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext)
+        if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+    if (ext == ".png") return ImageFormat::png;
+    if (ext == ".ppm") return ImageFormat::ppm;
+    throw std::invalid_argument(std::string(who) + ": '" + path + "': unknown extension '" + ext + "' (use .png or .ppm)");
+}
+
+/// Whether stb's PNG encoder takes a width × height image: it counts bytes in int, so the
+/// filtered rows, (3·width + 1)·height bytes, must stay under 2^30.
+[[nodiscard]] inline bool png_encodable(int width, int height) noexcept {
+    return (std::size_t(width) * 3 + 1) * std::size_t(height) < (std::size_t(1) << 30);
+}
+
+[[nodiscard]] inline std::string png_too_large(int width, int height) {
+    return "image too large for the PNG encoder (" + std::to_string(width) + "×" + std::to_string(height) +
+           ": (3·width + 1)·height must stay under 2^30)";
+}
+
+} // namespace detail
+
 /// Writes `image` as an 8-bit RGB PNG, atomically. Throws std::runtime_error, also when stb is
-/// missing or the image is too large for stb's encoder ((3·width + 1)·height ≥ 2^30 bytes).
+/// missing or the image is too large for stb's encoder (check_image_output tells beforehand).
 inline void write_png(const Image& image, const std::string& path) {
     const char* who = "isin::write_png";
 #if ISIN_HAVE_STB
-    const std::size_t raw = (std::size_t(image.width()) * 3 + 1) * std::size_t(image.height());
-    if (raw >= (std::size_t(1) << 30)) // stb's encoder counts bytes in int
-        throw detail::file_error(who, path, "image too large for the PNG encoder (" +
-                                                std::to_string(image.width()) + "×" +
-                                                std::to_string(image.height()) + ")");
+    if (!detail::png_encodable(image.width(), image.height()))
+        throw detail::file_error(who, path, detail::png_too_large(image.width(), image.height()));
     struct Sink {
         std::vector<unsigned char> bytes;
         bool failed = false;
@@ -288,7 +246,7 @@ inline void write_png(const Image& image, const std::string& path) {
     const int ok = stbi_write_png_to_func(append, &sink, image.width(), image.height(), 3,
                                           image.data(), image.width() * 3);
     if (!ok || sink.failed) throw detail::file_error(who, path, "PNG encoding failed (out of memory)");
-    detail::write_file_atomically(who, path, sink.bytes);
+    detail::write_file(who, path, sink.bytes);
 #else
     (void)image;
     throw detail::file_error(who, path, "writing PNG needs the stb headers (Debian/Ubuntu: "
@@ -299,36 +257,52 @@ inline void write_png(const Image& image, const std::string& path) {
 /// Writes `image` in the format named by the extension of `path`: ".png" or ".ppm", in any
 /// letter case. Throws std::invalid_argument for any other extension, else as write_png/ppm.
 inline void write_image(const Image& image, const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext)
-        if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
-    if (ext == ".png") return write_png(image, path);
-    if (ext == ".ppm") return write_ppm(image, path);
-    throw std::invalid_argument("isin::write_image: '" + path + "': unknown extension '" + ext +
-                                "' (use .png or .ppm)");
+    if (detail::output_format("isin::write_image", path) == detail::ImageFormat::png) return write_png(image, path);
+    write_ppm(image, path);
 }
 
-/// Reads a PNG, JPEG (via stb) or binary PPM (P6, built in) file as 8-bit RGB; the format is
-/// told by the content, not the name. Throws std::runtime_error naming `path` and the reason
-/// (stb's failure reason for PNG/JPEG).
-[[nodiscard]] inline Image read_image(const std::string& path) {
+/// Throws std::invalid_argument if write_image could not write a width × height image to
+/// `path` whatever the file system says: an unknown extension, or a PNG too large for the
+/// encoder. Call it before long work whose result goes there.
+inline void check_image_output(const std::string& path, int width, int height) {
+    const char* who = "isin::check_image_output";
+    if (detail::output_format(who, path) == detail::ImageFormat::png && !detail::png_encodable(width, height))
+        throw std::invalid_argument(std::string(who) + ": '" + path + "': " + detail::png_too_large(width, height));
+}
+
+/// Decodes PNG, JPEG (via stb) or binary PPM (P6, built in) data as 8-bit RGB; the format is
+/// told by the content. Safe on hostile data: the structure is checked first (see
+/// detail/image_check.hpp), the size from the header against limits.max_pixels before any
+/// decoding, and truncated data is an error. Throws std::runtime_error naming `name` and the
+/// reason (stb's failure reason for PNG/JPEG it refuses).
+[[nodiscard]] inline Image read_image_from_memory(const void* data, std::size_t size, const ReadLimits& limits = {},
+                                                  const std::string& name = "memory") {
     const char* who = "isin::read_image";
-    const std::vector<unsigned char> bytes = detail::read_file(who, path);
-    if (bytes.size() >= 2 && bytes[0] == 'P' && bytes[1] == '6') return detail::decode_ppm(bytes, path);
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    if (!bytes) size = 0;
+    if (size >= 2 && bytes[0] == 'P' && bytes[1] == '6') return detail::decode_ppm(bytes, size, name, limits);
+    std::vector<unsigned char> fixed; // a PNG without its empty leading IDAT chunks, if it has any
+    detail::ImageCheck check;
+    if (detail::is_png(bytes, size)) check = detail::check_png(bytes, size, limits, fixed);
+    else if (detail::is_jpeg(bytes, size)) check = detail::check_jpeg(bytes, size, limits);
+    else throw detail::file_error(who, name, "not a PNG, JPEG or binary PPM image");
+    if (!check.why.empty()) throw detail::file_error(who, name, check.why);
+    if (check.width > std::uint32_t(Image::max_side) || check.height > std::uint32_t(Image::max_side))
+        throw detail::file_error(who, name, "image size " + std::to_string(check.width) + "×" +
+                                                std::to_string(check.height) + " is not supported (sides up to " +
+                                                std::to_string(Image::max_side) + ")");
 #if ISIN_HAVE_STB
-    if (bytes.size() > std::size_t(INT_MAX)) throw detail::file_error(who, path, "file too large");
+    if (!fixed.empty()) bytes = fixed.data(), size = fixed.size();
+    if (size > std::size_t(INT_MAX)) throw detail::file_error(who, name, "data too large for the decoder");
     int w = 0, h = 0, channels = 0;
     std::unique_ptr<stbi_uc, void (*)(void*)> pixels(
-        stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &w, &h, &channels, 3),
-        &stbi_image_free);
+        stbi_load_from_memory(bytes, static_cast<int>(size), &w, &h, &channels, 3), &stbi_image_free);
     if (!pixels) {
         const char* reason = stbi_failure_reason();
-        throw detail::file_error(who, path, std::string("cannot decode: ") +
-                                                (reason ? reason : "unknown error"));
+        throw detail::file_error(who, name, std::string("cannot decode: ") + (reason ? reason : "unknown error"));
     }
-    if (w < 1 || h < 1 || w > Image::max_side || h > Image::max_side)
-        throw detail::file_error(who, path, "image size " + std::to_string(w) + "×" +
-                                                std::to_string(h) + " is not supported");
+    if (std::uint32_t(w) != check.width || std::uint32_t(h) != check.height)
+        throw detail::file_error(who, name, "decoded size differs from the header's");
     Image image(w, h);
     Rgb8* out = image.data();
     const stbi_uc* in = pixels.get();
@@ -336,9 +310,18 @@ inline void write_image(const Image& image, const std::string& path) {
         out[i] = Rgb8{in[3 * i], in[3 * i + 1], in[3 * i + 2]};
     return image;
 #else
-    throw detail::file_error(who, path, "not a binary PPM; reading PNG or JPEG needs the stb "
+    throw detail::file_error(who, name, "not a binary PPM; reading PNG or JPEG needs the stb "
                                         "headers (Debian/Ubuntu: install libstb-dev)");
 #endif
+}
+
+/// Reads a PNG, JPEG or binary PPM file as read_image_from_memory does; only regular files of
+/// at most limits.max_file_bytes are read. Throws std::runtime_error naming `path`.
+[[nodiscard]] inline Image read_image(const std::string& path, const ReadLimits& limits = {}) {
+    std::vector<unsigned char> bytes;
+    const std::string why = detail::read_whole_file(path, bytes, limits);
+    if (!why.empty()) throw detail::file_error("isin::read_image", path, why);
+    return read_image_from_memory(bytes.data(), bytes.size(), limits, path);
 }
 
 } // namespace isin

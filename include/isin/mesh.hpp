@@ -44,12 +44,14 @@
 #include <stdexcept>
 #include <streambuf>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <utility>
 #include <vector>
 
 #include "detail/file.hpp"
 #include "detail/tinyobj.hpp"
+#include "read_limits.hpp"
 #include "triangle.hpp"
 #include "vec.hpp"
 
@@ -77,10 +79,11 @@ namespace detail {
     return MeshError(std::string(who) + ": '" + path + "': " + why);
 }
 
-/// The whole file, read once; its size bounds everything the loaders allocate.
-[[nodiscard]] inline std::string mesh_read_file(const char* who, const std::string& path) {
+/// The whole file, read once (regular files up to limits.max_file_bytes); its size bounds
+/// everything the loaders allocate.
+[[nodiscard]] inline std::string mesh_read_file(const char* who, const std::string& path, const ReadLimits& limits) {
     std::string bytes;
-    const std::string why = read_whole_file(path, bytes);
+    const std::string why = read_whole_file(path, bytes, limits);
     if (!why.empty()) throw mesh_error(who, path, why);
     return bytes;
 }
@@ -241,7 +244,7 @@ enum class NumberStatus { ok, malformed, out_of_range };
 /// Calls f(line_number, begin, end) for each line as tinyobjloader splits them ('\n', "\r\n"
 /// or '\r' ends a line; a NUL byte ends its content); stops when f returns false.
 template <class F>
-inline void obj_for_each_line(const std::string& text, F&& f) {
+inline void obj_for_each_line(std::string_view text, F&& f) {
     const char* const data = text.data();
     const std::size_t n = text.size();
     std::size_t pos = 0, line = 0;
@@ -258,14 +261,38 @@ inline void obj_for_each_line(const std::string& text, F&& f) {
     }
 }
 
-/// 'v' for a vertex statement, 'f' for a face, 0 otherwise (tinyobjloader's classification);
-/// `b` is left after the keyword.
+/// 'v' for a vertex statement, 'f' for a face, 'n' for a normal (vn), 't' for a texture
+/// coordinate (vt), 0 otherwise (tinyobjloader's classification); `b` is left after the keyword.
 [[nodiscard]] inline char obj_statement(const char*& b, const char* e) noexcept {
     while (b != e && (*b == ' ' || *b == '\t')) ++b;
-    if (e - b < 2 || (b[1] != ' ' && b[1] != '\t')) return 0;
+    const auto blank = [](char c) { return c == ' ' || c == '\t'; };
+    if (e - b >= 3 && b[0] == 'v' && (b[1] == 'n' || b[1] == 't') && blank(b[2])) {
+        const char kind = b[1];
+        b += 3;
+        return kind;
+    }
+    if (e - b < 2 || !blank(b[1])) return 0;
     const char kind = (*b == 'v' || *b == 'f') ? *b : 0;
     if (kind) b += 2;
     return kind;
+}
+
+/// Why tinyobjloader's number parser must not see the token [b, e), or "". It accumulates the
+/// exponent in an int whose overflow guard is off by one (ten or more significant exponent
+/// digits are undefined behaviour) and counts digits in an int; isin refuses such tokens first.
+[[nodiscard]] inline std::string obj_unsafe_number(const char* b, const char* e) {
+    constexpr std::ptrdiff_t longest = 4096;
+    if (e - b > longest) return "number " + mesh_quote(b, e) + " is longer than " + std::to_string(longest) + " characters";
+    for (const char* p = b; p != e; ++p) {
+        if (*p != 'e' && *p != 'E') continue;
+        const char* d = p + 1;
+        if (d != e && (*d == '+' || *d == '-')) ++d;
+        while (d != e && *d == '0') ++d;
+        int digits = 0;
+        for (; d != e && *d >= '0' && *d <= '9'; ++d) ++digits;
+        if (digits > 9) return "exponent of " + mesh_quote(b, e) + " is out of range";
+    }
+    return "";
 }
 
 /// Next token separated by spaces or tabs; false at the end of the line.
@@ -295,17 +322,27 @@ inline void obj_for_each_line(const std::string& text, F&& f) {
     const char* p = slash + 1;
     const char* second = static_cast<const char*>(std::memchr(p, '/', static_cast<std::size_t>(e - p)));
     const char* vt_end = second ? second : e;
-    long long ignored = 0;
-    const bool vt_ok = (p == vt_end && second) || mesh_parse_int(p, vt_end, ignored) != NumberStatus::malformed;
-    const bool vn_ok = !second || mesh_parse_int(second + 1, e, ignored) != NumberStatus::malformed;
-    if (!vt_ok || !vn_ok) return "malformed vertex reference " + mesh_quote(b, e);
+    // tinyobjloader reads each part with atoi: every part must also fit an int.
+    const auto part = [](const char* pb, const char* pe) {
+        long long index = 0;
+        const NumberStatus part_status = mesh_parse_int(pb, pe, index);
+        if (part_status == NumberStatus::malformed) return 1;
+        if (part_status == NumberStatus::out_of_range || index > std::numeric_limits<int>::max() ||
+            index < std::numeric_limits<int>::min())
+            return 2;
+        return 0;
+    };
+    const int vt = (p == vt_end && second) ? 0 : part(p, vt_end);
+    const int vn = second ? part(second + 1, e) : 0;
+    if (vt == 1 || vn == 1) return "malformed vertex reference " + mesh_quote(b, e);
+    if (vt == 2 || vn == 2) return "index in " + mesh_quote(b, e) + " is out of range";
     return "";
 }
 
 /// isin's own pass over the text: every number on a `v` line well formed and finite, the first
 /// three within T; every `f` line with at least 3 well-formed references, none 0.
 template <class T>
-inline void obj_check_text(const char* who, const std::string& path, const std::string& text) {
+inline void obj_check_text(const char* who, const std::string& path, std::string_view text) {
     obj_for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
         const auto fail = [&](const std::string& why) {
             throw mesh_error(who, path, "line " + std::to_string(line) + ": " + why);
@@ -313,8 +350,15 @@ inline void obj_check_text(const char* who, const std::string& path, const std::
         const char kind = obj_statement(b, e);
         const char *tb = nullptr, *te = nullptr;
         int count = 0;
-        if (kind == 'v') {
+        if (kind == 'n' || kind == 't') { // not read by isin: only what tinyobjloader must not see
+            for (int k = 0; k < 3 && obj_token(b, e, tb, te); ++k) {
+                const std::string why = obj_unsafe_number(tb, te);
+                if (!why.empty()) fail(why);
+            }
+        } else if (kind == 'v') {
             while (obj_token(b, e, tb, te) && *tb != '#') { // numbers until a trailing comment
+                const std::string unsafe = obj_unsafe_number(tb, te);
+                if (!unsafe.empty()) fail(unsafe);
                 double value = 0;
                 const NumberStatus status = mesh_parse_real(tb, te, value);
                 if (status != NumberStatus::ok) fail(mesh_bad_real("coordinate", tb, te, status));
@@ -338,7 +382,7 @@ inline void obj_check_text(const char* who, const std::string& path, const std::
 /// Sets the vertices listed in `redo` (ordinals of `v` statements, ascending) from the text with
 /// isin's own number parser; returns false if one does not give three numbers that fit T.
 template <class T>
-[[nodiscard]] inline bool obj_reread_vertices(const std::string& text, const std::vector<std::size_t>& redo,
+[[nodiscard]] inline bool obj_reread_vertices(std::string_view text, const std::vector<std::size_t>& redo,
                                               std::vector<Vertex<T>>& vertices) {
     std::size_t seen = 0, next = 0;
     bool ok = true;
@@ -358,7 +402,7 @@ template <class T>
 }
 
 /// Line number of the `ordinal`-th (from 0) statement of `kind` ('v' or 'f'); 0 if none.
-[[nodiscard]] inline std::size_t obj_statement_line(const std::string& text, char kind,
+[[nodiscard]] inline std::size_t obj_statement_line(std::string_view text, char kind,
                                                     std::size_t ordinal) {
     std::size_t seen = 0, found = 0;
     obj_for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
@@ -376,7 +420,10 @@ template <class T>
 /// Hands a string to tinyobjloader as a stream, without copying it.
 class ObjTextBuf : public std::streambuf {
 public:
-    explicit ObjTextBuf(std::string& text) { setg(text.data(), text.data(), text.data() + text.size()); }
+    explicit ObjTextBuf(std::string_view text) { // read only: the get area is never written
+        char* b = const_cast<char*>(text.data());
+        setg(b, b, b + text.size());
+    }
 };
 
 /// What tinyobjloader's callbacks collect: vertices, fan triangles as 0-based indices, and the
@@ -525,7 +572,7 @@ struct PlyHeader {
 /// Parses the header and marks the properties isin reads (x, y, z of `vertex`, the index list
 /// of `face`).
 [[nodiscard]] inline PlyHeader ply_parse_header(const char* who, const std::string& path,
-                                                const std::string& file) {
+                                                std::string_view file) {
     PlyHeader h;
     std::size_t pos = 0, line = 0;
     std::vector<std::string> tokens;
@@ -549,9 +596,9 @@ struct PlyHeader {
             while (p < text_end && (file[p] == ' ' || file[p] == '\t')) ++p;
             const std::size_t s = p;
             while (p < text_end && file[p] != ' ' && file[p] != '\t') ++p;
-            if (p > s) tokens.emplace_back(file, s, p - s);
+            if (p > s) tokens.emplace_back(file.substr(s, p - s));
         }
-        const std::string whole(file, pos, text_end - pos);
+        const std::string_view whole = file.substr(pos, text_end - pos);
         pos = end < file.size() ? end + 1 : end;
 
         if (line == 1) {
@@ -663,7 +710,7 @@ struct PlyContext {
 /// Binary little-endian data; positions are byte offsets from the start of the file.
 class PlyBinaryReader {
 public:
-    PlyBinaryReader(const char* who, const std::string& path, const std::string& file, std::size_t pos)
+    PlyBinaryReader(const char* who, const std::string& path, std::string_view file, std::size_t pos)
         : who_(who), path_(path), data_(file.data()), size_(file.size()), pos_(pos), start_(pos) {}
 
     PlyContext context;
@@ -748,7 +795,7 @@ private:
 /// ASCII data: whitespace-separated numbers; positions are line numbers.
 class PlyAsciiReader {
 public:
-    PlyAsciiReader(const char* who, const std::string& path, const std::string& file, std::size_t pos,
+    PlyAsciiReader(const char* who, const std::string& path, std::string_view file, std::size_t pos,
                    std::size_t line)
         : who_(who), path_(path), data_(file.data()), size_(file.size()), pos_(pos), line_(line),
           start_line_(line) {}
@@ -909,31 +956,27 @@ template <class T>
 
 } // namespace detail
 
-/// Triangles of a Wavefront OBJ file (`v` and `f` statements; polygons as fans, winding kept).
-/// Throws MeshError naming the file and line; std::runtime_error without tinyobjloader.
-template <class T>
-[[nodiscard]] std::vector<Triangle<T>> load_obj(const std::string& path) {
-    static_assert(std::is_floating_point_v<T>, "isin::load_obj needs a floating-point type");
-    const char* who = "isin::load_obj";
-#if ISIN_HAVE_TINYOBJLOADER
-    std::string text = detail::mesh_read_file(who, path);
-    detail::obj_check_text<T>(who, path, text);
+namespace detail {
 
-    detail::ObjCollector<T> c;
-    detail::tobj::callback_t callbacks;
-    callbacks.vertex_cb = &detail::ObjCollector<T>::on_vertex;
-    callbacks.index_cb = &detail::ObjCollector<T>::on_face;
-    detail::ObjTextBuf buf(text);
+template <class T>
+[[nodiscard]] std::vector<Triangle<T>> parse_obj(const char* who, const std::string& name, std::string_view text) {
+    static_assert(std::is_floating_point_v<T>, "isin::load_obj needs a floating-point type");
+#if ISIN_HAVE_TINYOBJLOADER
+    obj_check_text<T>(who, name, text);
+    ObjCollector<T> c;
+    tobj::callback_t callbacks;
+    callbacks.vertex_cb = &ObjCollector<T>::on_vertex;
+    callbacks.index_cb = &ObjCollector<T>::on_face;
+    ObjTextBuf buf(text);
     std::istream in(&buf);
     std::string warn, err;
     // No MaterialReader: mtllib lines are skipped, no .mtl file is opened.
-    const bool ok = detail::tobj::LoadObjWithCallback(in, callbacks, &c, nullptr, &warn, &err);
+    const bool ok = tobj::LoadObjWithCallback(in, callbacks, &c, nullptr, &warn, &err);
     if (!ok || !err.empty())
-        throw detail::mesh_error(who, path, "tinyobjloader: " + (err.empty() ? std::string("failed") : err));
+        throw mesh_error(who, name, "tinyobjloader: " + (err.empty() ? std::string("failed") : err));
 
     const auto at_line = [&](char kind, std::size_t ordinal, const std::string& why) {
-        return detail::mesh_error(who, path, "line " + std::to_string(detail::obj_statement_line(text, kind, ordinal)) +
-                                                 ": " + why);
+        return mesh_error(who, name, "line " + std::to_string(obj_statement_line(text, kind, ordinal)) + ": " + why);
     };
     for (const auto& [face, raw] : c.forward) { // forward references, now that all vertices are in
         if (static_cast<std::size_t>(raw) <= c.vertices.size()) continue;
@@ -944,45 +987,76 @@ template <class T>
         break;
     }
     if (c.bad_kind) throw at_line(c.bad_kind, c.bad_ordinal, c.bad_why);
-    if (!c.redo.empty() && !detail::obj_reread_vertices(text, c.redo, c.vertices))
-        throw at_line('v', c.redo.front(), "coordinate out of range for " + std::string(detail::mesh_type_name<T>()));
-    return detail::mesh_triangles(c.vertices, c.triangles);
+    if (!c.redo.empty() && !obj_reread_vertices(text, c.redo, c.vertices))
+        throw at_line('v', c.redo.front(), "coordinate out of range for " + std::string(mesh_type_name<T>()));
+    return mesh_triangles(c.vertices, c.triangles);
 #else
-    throw std::runtime_error(std::string(who) + ": '" + path + "': reading OBJ needs tinyobjloader "
+    (void)text;
+    throw std::runtime_error(std::string(who) + ": '" + name + "': reading OBJ needs tinyobjloader "
                              "(Debian/Ubuntu: install libtinyobjloader-dev); PLY works without it");
 #endif
 }
 
-/// Triangles of a PLY file: ascii or binary_little_endian 1.0, positions from vertex x, y, z
-/// (any scalar type), polygons from face vertex_indices (or vertex_index) as fans, winding kept.
-/// Throws MeshError naming the file and line (ASCII) or byte offset (binary).
 template <class T>
-[[nodiscard]] std::vector<Triangle<T>> load_ply(const std::string& path) {
+[[nodiscard]] std::vector<Triangle<T>> parse_ply(const char* who, const std::string& name, std::string_view file) {
     static_assert(std::is_floating_point_v<T>, "isin::load_ply needs a floating-point type");
-    const char* who = "isin::load_ply";
-    const std::string file = detail::mesh_read_file(who, path);
-    const detail::PlyHeader h = detail::ply_parse_header(who, path, file);
+    const PlyHeader h = ply_parse_header(who, name, file);
     std::vector<Vertex<T>> vertices;
     std::vector<std::array<std::size_t, 3>> tris;
     if (h.binary) {
-        detail::PlyBinaryReader r(who, path, file, h.data_offset);
-        detail::ply_read_body<T>(r, h, vertices, tris);
+        PlyBinaryReader r(who, name, file, h.data_offset);
+        ply_read_body<T>(r, h, vertices, tris);
     } else {
-        detail::PlyAsciiReader r(who, path, file, h.data_offset, h.data_line);
-        detail::ply_read_body<T>(r, h, vertices, tris);
+        PlyAsciiReader r(who, name, file, h.data_offset, h.data_line);
+        ply_read_body<T>(r, h, vertices, tris);
     }
-    return detail::mesh_triangles(vertices, tris);
+    return mesh_triangles(vertices, tris);
+}
+
+} // namespace detail
+
+/// A mesh file format, for the in-memory loader.
+enum class MeshFormat { obj, ply };
+
+/// Triangles of a Wavefront OBJ file (`v` and `f` statements; polygons as fans, winding kept).
+/// Only regular files of at most limits.max_file_bytes are read. Throws MeshError naming the
+/// file and line; std::runtime_error without tinyobjloader.
+template <class T>
+[[nodiscard]] std::vector<Triangle<T>> load_obj(const std::string& path, const ReadLimits& limits = {}) {
+    const char* who = "isin::load_obj";
+    return detail::parse_obj<T>(who, path, detail::mesh_read_file(who, path, limits));
+}
+
+/// Triangles of a PLY file: ascii or binary_little_endian 1.0, positions from vertex x, y, z
+/// (any scalar type), polygons from face vertex_indices (or vertex_index) as fans, winding kept.
+/// Only regular files of at most limits.max_file_bytes are read. Throws MeshError naming the
+/// file and line (ASCII) or byte offset (binary).
+template <class T>
+[[nodiscard]] std::vector<Triangle<T>> load_ply(const std::string& path, const ReadLimits& limits = {}) {
+    const char* who = "isin::load_ply";
+    return detail::parse_ply<T>(who, path, detail::mesh_read_file(who, path, limits));
+}
+
+/// Triangles of OBJ or PLY data in memory (`size` bytes at `data`), as load_obj / load_ply read
+/// a file: for meshes that arrive over a network or from an archive, with no temporary file.
+/// Errors are MeshError naming `name` in place of a file.
+template <class T>
+[[nodiscard]] std::vector<Triangle<T>> load_mesh_from_memory(const void* data, std::size_t size, MeshFormat format,
+                                                             const std::string& name = "memory") {
+    const std::string_view bytes(data ? static_cast<const char*>(data) : "", data ? size : 0);
+    return format == MeshFormat::obj ? detail::parse_obj<T>("isin::load_obj", name, bytes)
+                                     : detail::parse_ply<T>("isin::load_ply", name, bytes);
 }
 
 /// Triangles of an OBJ or PLY file, chosen by the extension (.obj, .ply, any letter case).
 /// Throws std::invalid_argument naming the path for any other extension, else as load_obj/ply.
 template <class T>
-[[nodiscard]] std::vector<Triangle<T>> load_mesh(const std::string& path) {
+[[nodiscard]] std::vector<Triangle<T>> load_mesh(const std::string& path, const ReadLimits& limits = {}) {
     std::string ext = std::filesystem::path(path).extension().string();
     for (char& ch : ext)
         if (ch >= 'A' && ch <= 'Z') ch = static_cast<char>(ch - 'A' + 'a');
-    if (ext == ".obj") return load_obj<T>(path);
-    if (ext == ".ply") return load_ply<T>(path);
+    if (ext == ".obj") return load_obj<T>(path, limits);
+    if (ext == ".ply") return load_ply<T>(path, limits);
     throw std::invalid_argument("isin::load_mesh: '" + path + "': unknown extension '" + ext +
                                 "' (use .obj or .ply)");
 }

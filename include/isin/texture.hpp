@@ -122,8 +122,8 @@ public:
     }
 
     /// Loads a PNG, JPEG or PPM file via read_image; throws as read_image does.
-    [[nodiscard]] static ImageTexture load(const std::string& path) {
-        return ImageTexture(read_image(path));
+    [[nodiscard]] static ImageTexture load(const std::string& path, const ReadLimits& limits = {}) {
+        return ImageTexture(read_image(path, limits));
     }
 
     [[nodiscard]] T width() const noexcept { return T(width_); }

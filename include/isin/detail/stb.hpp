@@ -86,6 +86,15 @@
 #define STBI_ONLY_JPEG
 #define ISIN_DETAIL_UNDEF_STBI_ONLY
 #endif
+// Zeroed allocations: stb 2.27 reads decoder state it never wrote (tables a corrupt JPEG does
+// not define); isin's checks refuse such files, and zeroed memory makes anything they miss
+// deterministic instead of a read of old heap contents.
+#if !defined(STBI_MALLOC) && !defined(STBI_REALLOC) && !defined(STBI_REALLOC_SIZED) && !defined(STBI_FREE)
+#define STBI_MALLOC(size) calloc(1, size)
+#define STBI_REALLOC(p, size) realloc(p, size)
+#define STBI_FREE(p) free(p)
+#define ISIN_DETAIL_UNDEF_STBI_ALLOC
+#endif
 
 #if ISIN_DETAIL_STB_IMAGE == 2
 #include <stb/stb_image.h>
@@ -113,6 +122,12 @@
 #undef STBI_ONLY_PNG
 #undef STBI_ONLY_JPEG
 #undef ISIN_DETAIL_UNDEF_STBI_ONLY
+#endif
+#ifdef ISIN_DETAIL_UNDEF_STBI_ALLOC
+#undef STBI_MALLOC
+#undef STBI_REALLOC
+#undef STBI_FREE
+#undef ISIN_DETAIL_UNDEF_STBI_ALLOC
 #endif
 #pragma pop_macro("STBIDEF")
 #endif // ISIN_DETAIL_STB_IMAGE >= 2
