@@ -256,3 +256,108 @@ TEST_CASE_TEMPLATE("scene: a mesh gets a BVH; hits, shadows and culling agree wi
     scene.commit();
     CHECK(scene.template has_bvh<isin::Triangle<T>>());
 }
+
+// ---- hardening: failed threads, worker exceptions, bad indices, depth ------------------------------
+
+#include "without_threads.hpp"
+
+namespace user {
+
+/// A user's primitive kind: a sphere whose intersection throws when it is hit.
+template <class T>
+struct Trap {
+    isin::Sphere<T> sphere;
+};
+template <class T>
+isin::Hit<T> intersect_primitive(const isin::Ray<T>& ray, const Trap<T>& trap, isin::TriangleMethod) {
+    const isin::Hit<T> h = isin::intersect(ray, trap.sphere);
+    if (h) throw std::runtime_error("the trap was hit");
+    return h;
+}
+template <class T>
+isin::Vertex<T> surface_normal(const Trap<T>& trap, const isin::Vertex<T>& p, const isin::Hit<T>&) {
+    return isin::normal_at(trap.sphere, p);
+}
+template <class T>
+constexpr const isin::Triangle<T>* triangle_of(const Trap<T>&) noexcept {
+    return nullptr;
+}
+
+} // namespace user
+
+TEST_CASE("render: threads that cannot start leave their rows to the others, same picture (D4)") {
+    const auto scene = note_scene::make<float>();
+    const isin::Camera<float> cam{64, 36};
+    isin::RenderOptions opt;
+    opt.progress = false;
+    opt.threads = 1;
+    const isin::Image reference = isin::render(scene, cam, opt);
+    opt.threads = 4;
+    const WithoutThreads result = without_threads([&] { return isin::render(scene, cam, opt).pixels() == reference.pixels(); });
+    if (result == WithoutThreads::not_run) MESSAGE("not run: threads still start in a child under RLIMIT_NPROC = 0");
+    else CHECK(result == WithoutThreads::passed); // before: std::terminate (joinable threads destroyed)
+}
+
+TEST_CASE("render: an exception thrown in a worker (a user primitive) reaches the caller (D4)") {
+    isin::Scene<float, isin::Sphere, user::Trap> scene;
+    const auto m = scene.add_material({});
+    scene.add(isin::Sphere<float>{{-3, 0, 20}, 2}, m);
+    scene.add(user::Trap<float>{{{3, 0, 20}, 2}}, m);
+    scene.add_light({{0, 10, 0}});
+    isin::RenderOptions opt;
+    opt.progress = false;
+    for (int threads : {1, 2, 3}) {
+        opt.threads = threads;
+        CHECK_THROWS_WITH_AS((void)isin::render(scene, isin::Camera<float>{48, 27}, opt), "the trap was hit",
+                             std::runtime_error);
+    }
+}
+
+TEST_CASE("render and trace: a material or texture that does not exist is std::out_of_range, not a heap overflow (D5)") {
+    isin::Scene<float, isin::TexturedTriangle, isin::Sphere> scene;
+    isin::Material<float> textured;
+    textured.texture = 5; // no textures at all
+    const auto m = scene.add_material(textured);
+    scene.add_textured_rectangle({-10, -10, 20}, {10, -10, 20}, {-10, 10, 20}, m);
+    isin::RenderOptions opt;
+    opt.progress = false;
+    const isin::Camera<float> cam{32, 18};
+    CHECK_THROWS_AS((void)isin::render(scene, cam, opt), std::out_of_range);
+    isin::RenderStats stats;
+    const isin::Ray<float> ahead{{0, 0, 0}, {0, 0, 1}};
+    CHECK_THROWS_AS((void)isin::trace(scene, ahead, 0, opt, stats), std::out_of_range);
+    scene.materials[0].texture = scene.add_texture(isin::Checkerboard<float>{});
+    CHECK_NOTHROW((void)isin::render(scene, cam, opt));
+    scene.materials.clear(); // the rectangle's material is gone
+    CHECK_THROWS_AS((void)isin::render(scene, cam, opt), std::out_of_range);
+    CHECK_THROWS_AS((void)isin::trace(scene, ahead, 0, opt, stats), std::out_of_range);
+}
+
+TEST_CASE("render: max_depth is bounded; at the bound two facing mirrors render on every thread (D6)") {
+    // Two mirrors facing each other across the eye: every primary ray bounces to max_depth.
+    isin::Scene<float, isin::Triangle> scene;
+    isin::Material<float> mirror;
+    mirror.reflectivity = 0.999f;
+    const auto m = scene.add_material(mirror);
+    const float s = 1e6f; // wide enough that no ray leaves them in 256 bounces
+    scene.add(isin::Triangle<float>{{-s, -s, 10}, {-s, s, 10}, {s, -s, 10}}, m);
+    scene.add(isin::Triangle<float>{{s, -s, 10}, {-s, s, 10}, {s, s, 10}}, m);
+    scene.add(isin::Triangle<float>{{-s, -s, -10}, {s, -s, -10}, {-s, s, -10}}, m);
+    scene.add(isin::Triangle<float>{{s, -s, -10}, {s, s, -10}, {-s, s, -10}}, m);
+    scene.add_light({{0, 0, 0}});
+    isin::RenderOptions opt;
+    opt.progress = false;
+    opt.threads = 2;
+    const isin::Camera<float> cam{16, 9};
+    opt.max_depth = 20000; // overflowed the stack
+    CHECK_THROWS_AS((void)isin::render(scene, cam, opt), std::invalid_argument);
+    opt.max_depth = -1;
+    CHECK_THROWS_AS((void)isin::render(scene, cam, opt), std::invalid_argument);
+    opt.max_depth = isin::RenderOptions::max_depth_limit;
+    isin::RenderStats stats;
+    (void)isin::render(scene, cam, opt, &stats);
+    CHECK(stats.reflection == std::uint64_t(16 * 9) * std::uint64_t(isin::RenderOptions::max_depth_limit));
+    CHECK_THROWS_AS((void)isin::trace(scene, isin::Ray<float>{{0, 0, 0}, {0, 0, 1}}, isin::RenderOptions::max_depth_limit + 1,
+                                      opt, stats),
+                    std::invalid_argument);
+}

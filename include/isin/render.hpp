@@ -11,7 +11,6 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 #if defined(__unix__) || defined(__APPLE__)
@@ -22,6 +21,7 @@
 #include "camera.hpp"
 #include "color.hpp"
 #include "culling.hpp"
+#include "detail/parallel.hpp"
 #include "image.hpp"
 #include "offset.hpp"
 #include "scene.hpp"
@@ -37,10 +37,13 @@ enum class Culling { none, dot_product, projected };
 struct RenderOptions {
     int threads = 0;                 ///< worker threads; 0 = std::thread::hardware_concurrency()
     int samples = 1;                 ///< N×N rays per pixel (1 = the note's one ray per pixel)
-    int max_depth = 4;               ///< longest chain of reflected/transmitted rays
+    int max_depth = 4;               ///< longest chain of reflected/transmitted rays, 0 … max_depth_limit
     bool shadows = true;             ///< cast shadow rays (§9)
     Culling culling = Culling::none; ///< backface culling for primary rays (§11)
     bool progress = true;            ///< progress bar on stderr, when it is a terminal and the render takes > 1 s
+    /// The largest max_depth: trace() recurses once per bounce, and this many levels fit any
+    /// thread's stack (as POV-Ray's max_trace_level, whose limit is also 256).
+    static constexpr int max_depth_limit = 256;
 };
 
 /// Rays a render traced, by kind, and its wall time.
@@ -81,12 +84,14 @@ template <class T, template <class> class... S>
 [[nodiscard]] Color<T> trace(const Scene<T, S...>& scene, const Ray<T>& ray, int depth,
                              const RenderOptions& opt, RenderStats& stats,
                              const std::array<std::vector<std::uint8_t>, sizeof...(S)>* skip = nullptr) {
+    if (depth > RenderOptions::max_depth_limit) // render() checks opt.max_depth; this bounds direct calls too
+        throw std::invalid_argument("isin::trace: depth " + std::to_string(depth) + " is beyond max_depth_limit");
     const SceneHit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
     if (!sh) return scene.background;
     const SurfacePoint<T> sp = scene.surface(ray, sh);
-    const Material<T>& m = scene.materials[sp.material];
+    const Material<T>& m = scene.material(sp.material);
     const Color<T> object = m.texture >= 0 && sp.has_texture_coordinates
-                                ? sample(scene.textures[std::size_t(m.texture)], sp.st[0], sp.st[1], scene.texture_filter)
+                                ? sample(scene.texture(m.texture), sp.st[0], sp.st[1], scene.texture_filter)
                                 : m.color;
     const Vertex<T>& d = ray.direction;
     const bool entering = dot(sp.normal, d) < T(0);
@@ -129,23 +134,30 @@ template <class T, template <class> class... S>
     return result;
 }
 
-/// Renders `scene` as seen by `camera` into a camera.width() × camera.height() image.
-/// Throws std::invalid_argument for samples outside [1, 16], negative threads or max_depth.
+/// Renders `scene` as seen by `camera` into a camera.width() × camera.height() image, on
+/// opt.threads threads (fewer if some cannot be started). Throws std::invalid_argument for
+/// samples outside [1, 16], negative threads, max_depth outside [0, max_depth_limit];
+/// std::out_of_range for an object or material whose material or texture does not exist
+/// (Scene::validate); and whatever a worker threw (e.g. a user primitive, std::bad_alloc), once
+/// every worker has stopped.
 template <class T, template <class> class... S>
 [[nodiscard]] Image render(const Scene<T, S...>& scene, const Camera<T>& camera,
                            const RenderOptions& opt = {}, RenderStats* stats_out = nullptr) {
     if (opt.samples < 1 || opt.samples > 16)
         throw std::invalid_argument("isin::render: samples " + std::to_string(opt.samples) + " is outside [1, 16]");
-    if (opt.threads < 0 || opt.max_depth < 0)
-        throw std::invalid_argument("isin::render: threads and max_depth must not be negative");
+    if (opt.threads < 0)
+        throw std::invalid_argument("isin::render: threads must not be negative");
+    if (opt.max_depth < 0 || opt.max_depth > RenderOptions::max_depth_limit)
+        throw std::invalid_argument("isin::render: max_depth " + std::to_string(opt.max_depth) + " is outside [0, " +
+                                    std::to_string(RenderOptions::max_depth_limit) + "]");
+    scene.validate();
     const auto start = std::chrono::steady_clock::now();
     const int W = camera.width(), H = camera.height(), N = opt.samples;
     Image image(W, H);
     const auto masks = backface_masks(scene, camera, opt.culling);
     const auto* skip = opt.culling == Culling::none ? nullptr : &masks;
 
-    int threads = opt.threads > 0 ? opt.threads : int(std::thread::hardware_concurrency());
-    threads = std::clamp(threads, 1, H);
+    const int threads = std::min(detail::thread_count(opt.threads), H);
     std::atomic<int> next_row{0}, rows_done{0};
     std::mutex stats_mutex;
     RenderStats total;
@@ -156,10 +168,11 @@ template <class T, template <class> class... S>
 #endif
     bool progress_shown = false;
 
-    auto work = [&](bool reporter) {
+    auto work = [&](int worker, const detail::FirstError& error) {
+        const bool reporter = worker == 0;
         RenderStats local;
         auto last_report = start;
-        for (int y; (y = next_row.fetch_add(1)) < H;) {
+        for (int y; !error.failed() && (y = next_row.fetch_add(1)) < H;) {
             for (int x = 0; x < W; ++x) {
                 Color<T> sum{T(0), T(0), T(0)};
                 for (int sy = 0; sy < N; ++sy)
@@ -187,11 +200,12 @@ template <class T, template <class> class... S>
         const std::lock_guard<std::mutex> lock(stats_mutex);
         total += local;
     };
-    std::vector<std::thread> pool;
-    pool.reserve(std::size_t(threads - 1));
-    for (int i = 1; i < threads; ++i) pool.emplace_back(work, false);
-    work(true);
-    for (auto& t : pool) t.join();
+    try {
+        detail::run_workers(threads, work);
+    } catch (...) {
+        if (progress_shown) std::fputc('\n', stderr);
+        throw;
+    }
     if (progress_shown) std::fprintf(stderr, "\r[%s] 100%%\n", "########################################");
     total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (stats_out) *stats_out = total;

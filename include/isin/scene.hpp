@@ -186,6 +186,34 @@ public:
     /// Adds a point light.
     void add_light(const PointLight<T>& light) { lights.push_back(light); }
 
+    /// Material `index`; throws std::out_of_range if it does not exist (materials is public and
+    /// may have changed since an object was added).
+    [[nodiscard]] const Material<T>& material(std::uint32_t index) const {
+        if (index >= materials.size())
+            throw std::out_of_range("isin::Scene: material " + std::to_string(index) + " does not exist (" +
+                                    std::to_string(materials.size()) + " materials)");
+        return materials[index];
+    }
+    /// Texture `index` (Material::texture); throws std::out_of_range if it does not exist.
+    [[nodiscard]] const Texture<T>& texture(int index) const {
+        if (index < 0 || std::size_t(index) >= textures.size())
+            throw std::out_of_range("isin::Scene: texture " + std::to_string(index) + " does not exist (" +
+                                    std::to_string(textures.size()) + " textures)");
+        return textures[std::size_t(index)];
+    }
+    /// Checks that every object's material and every material's texture (when ≥ 0) exist;
+    /// throws std::out_of_range naming the first that does not. render() calls it first.
+    void validate() const {
+        for (std::size_t i = 0; i < materials.size(); ++i)
+            if (materials[i].texture >= 0 && std::size_t(materials[i].texture) >= textures.size())
+                throw std::out_of_range("isin::Scene: material " + std::to_string(i) + " uses texture " +
+                                        std::to_string(materials[i].texture) + ", which does not exist (" +
+                                        std::to_string(textures.size()) + " textures)");
+        for_each_kind([&](auto, const auto& vec) {
+            for (std::size_t i = 0; i < vec.size(); ++i) (void)material(vec[i].material);
+        });
+    }
+
     /// Adds a primitive of one of the scene's kinds with a material index from add_material.
     /// Throws std::out_of_range for an unknown material.
     template <class Shape>
@@ -218,7 +246,7 @@ public:
                 auto& accel = std::get<kind>(batches_);
                 accel.bvh.reset();
                 accel.opaque = true;
-                for (const auto& obj : vec) accel.opaque = accel.opaque && !(materials[obj.material].transparency > T(0));
+                for (const auto& obj : vec) accel.opaque = accel.opaque && !(material(obj.material).transparency > T(0));
                 if (!uses(Acceleration::bvh, vec.size())) return;
                 std::vector<Triangle<T>> tris;
                 tris.reserve(vec.size());
@@ -260,7 +288,7 @@ public:
     /// by Möller–Trumbore go through the vectorised TriangleBatch, others one by one.
     [[nodiscard]] SceneHit<T> intersect(const Ray<T>& ray,
                                         T t_max = std::numeric_limits<T>::infinity(),
-                                        const std::array<std::vector<std::uint8_t>, kinds>* skip = nullptr) const noexcept {
+                                        const std::array<std::vector<std::uint8_t>, kinds>* skip = nullptr) const {
         SceneHit<T> best;
         best.hit.t = t_max;
         for_each_kind([&](auto kind, const auto& vec) {
@@ -288,7 +316,7 @@ public:
 
     /// Fraction of light that reaches along `ray` up to t_max: 1 when nothing is in the way, the
     /// product of the transparencies of the objects crossed otherwise (0 for an opaque one).
-    [[nodiscard]] T transmittance(const Ray<T>& ray, T t_max) const noexcept {
+    [[nodiscard]] T transmittance(const Ray<T>& ray, T t_max) const {
         T through = T(1);
         for_each_kind([&](auto kind, const auto& vec) {
             if (!(through > T(0))) return;
@@ -300,7 +328,7 @@ public:
                 }
                 if (uses(Acceleration::batch, vec.size())) {
                     accel.batch.each_hit(ray, t_max, [&](std::size_t i, T) {
-                        through *= materials[vec[i].material].transparency;
+                        through *= material(vec[i].material).transparency;
                         return through > T(0);
                     });
                     return;
@@ -308,14 +336,14 @@ public:
             }
             for (std::size_t i = 0; i < vec.size() && through > T(0); ++i) {
                 const Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
-                if (h.t < t_max) through *= materials[vec[i].material].transparency;
+                if (h.t < t_max) through *= material(vec[i].material).transparency;
             }
         });
         return through;
     }
 
     /// Point, normal, material and texture coordinates of a hit of `ray`.
-    [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const SceneHit<T>& sh) const noexcept {
+    [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const SceneHit<T>& sh) const {
         SurfacePoint<T> sp{};
         sp.point = ray.at(sh.hit.t);
         for_each_kind([&](auto kind, const auto& vec) {

@@ -1,0 +1,116 @@
+#pragma once
+/// isin — private: the threads of render() and of the Bvh build. Every way a worker can fail
+/// ends in the caller: a thread that cannot be started (a process limit, no memory) leaves its
+/// work to the threads that did start, and an exception thrown inside a worker (a user's
+/// primitive, std::bad_alloc) is rethrown by the call that started the workers, once every
+/// thread it started has been joined. std::terminate is never reached from here.
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <utility>
+#include <vector>
+
+namespace isin::detail {
+
+/// The first exception of several workers, and a flag the others can poll to stop early.
+class FirstError {
+public:
+    /// Records the exception being handled, unless one was recorded before.
+    void capture() noexcept {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        if (!error_) error_ = std::current_exception();
+        failed_.store(true, std::memory_order_relaxed);
+    }
+    [[nodiscard]] bool failed() const noexcept { return failed_.load(std::memory_order_relaxed); }
+    /// Rethrows the recorded exception, if any.
+    void rethrow() const {
+        if (error_) std::rethrow_exception(error_);
+    }
+
+private:
+    std::mutex mutex_;
+    std::exception_ptr error_;
+    std::atomic<bool> failed_{false};
+};
+
+/// The number of threads to use for `requested` (0 = every core; at least 1).
+[[nodiscard]] inline int thread_count(int requested) noexcept {
+    const int hw = int(std::thread::hardware_concurrency());
+    return std::max(1, requested > 0 ? requested : hw);
+}
+
+/// Runs body(worker, error) for worker = 0 … count − 1: worker 0 on the calling thread, the others
+/// on new threads, as many as can be started. Bodies must share their work out dynamically (e.g.
+/// from an atomic counter), since fewer of them may run, and may poll error.failed() to stop
+/// early. Joins every started thread, then rethrows the first exception of any body.
+template <class Body>
+void run_workers(int count, Body&& body) {
+    FirstError error;
+    const auto guarded = [&](int worker) noexcept {
+        try {
+            body(worker, static_cast<const FirstError&>(error));
+        } catch (...) {
+            error.capture();
+        }
+    };
+    std::vector<std::thread> threads;
+    try {
+        threads.reserve(std::size_t(std::max(0, count - 1)));
+        for (int worker = 1; worker < count; ++worker) threads.emplace_back(guarded, worker);
+    } catch (...) { // no more threads (or no memory to hold them): the started ones and this one do the work
+    }
+    guarded(0);
+    for (std::thread& t : threads) t.join();
+    error.rethrow();
+}
+
+/// Calls f(begin, end) over [0, n) in chunks of at least `min_chunk` items, on up to `threads`
+/// threads (run_workers: chunks are taken from a shared counter, exceptions reach the caller).
+template <class F>
+void parallel_chunks(std::size_t n, int threads, std::size_t min_chunk, const F& f) {
+    const std::size_t parts = std::max<std::size_t>(1, std::min(std::size_t(std::max(threads, 1)), n / std::max<std::size_t>(min_chunk, 1)));
+    const std::size_t chunk = (n + parts - 1) / parts;
+    std::atomic<std::size_t> next{0};
+    run_workers(int(parts), [&](int, const FirstError& error) {
+        for (std::size_t k; !error.failed() && (k = next.fetch_add(1)) < parts;)
+            f(std::min(n, k * chunk), std::min(n, (k + 1) * chunk));
+    });
+}
+
+/// Runs a() on a new thread and b() on this one, then rethrows the first exception of either
+/// once both have finished. When no thread can be started, a() runs here after b().
+template <class A, class B>
+void fork_join(A&& a, B&& b) {
+    FirstError error;
+    std::thread worker;
+    try {
+        worker = std::thread([&]() noexcept {
+            try {
+                a();
+            } catch (...) {
+                error.capture();
+            }
+        });
+    } catch (...) { // cannot start a thread: both run here
+    }
+    try {
+        b();
+    } catch (...) {
+        error.capture();
+    }
+    if (worker.joinable()) {
+        worker.join();
+    } else if (!error.failed()) {
+        try {
+            a();
+        } catch (...) {
+            error.capture();
+        }
+    }
+    error.rethrow();
+}
+
+} // namespace isin::detail
