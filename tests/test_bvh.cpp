@@ -7,10 +7,58 @@
 #include "approx.hpp"
 #include "../benchmarks/workloads.hpp"
 
+#include "without_threads.hpp"
+
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <new>
 #include <random>
+#include <thread>
 #include <vector>
+
+// Allocation that can be made to fail on every thread but the test's own, to check that an
+// exception in a build worker reaches the Bvh's constructor. Every replaceable form that pairs
+// with the plain operator delete is replaced, so that sanitizers see malloc paired with free.
+// ThreadSanitizer's runtime defines these operators itself: there the test is left out.
+#if defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define ISIN_TEST_TSAN 1
+#endif
+#endif
+#if defined(__SANITIZE_THREAD__)
+#define ISIN_TEST_TSAN 1
+#endif
+#ifndef ISIN_TEST_TSAN
+#define ISIN_TEST_REPLACES_NEW 1
+namespace {
+std::atomic<bool> fail_off_main_thread{false};
+std::thread::id main_thread_id = std::this_thread::get_id();
+void* allocate(std::size_t n) {
+    if (fail_off_main_thread.load(std::memory_order_relaxed) && std::this_thread::get_id() != main_thread_id)
+        throw std::bad_alloc();
+    if (void* p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+} // namespace
+void* operator new(std::size_t n) { return allocate(n); }
+void* operator new[](std::size_t n) { return allocate(n); }
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
+    try {
+        return allocate(n);
+    } catch (...) {
+        return nullptr;
+    }
+}
+void* operator new[](std::size_t n, const std::nothrow_t& t) noexcept { return operator new(n, t); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+#endif
 
 namespace {
 
@@ -172,12 +220,233 @@ TEST_CASE_TEMPLATE("BVH build: a box grown by an empty box (an empty bin) is unc
     isin::detail::Box<T> box;
     box.grow(isin::Vertex<T>{1, 2, 3});
     box.grow(isin::Vertex<T>{4, 5, 6});
-    const T area = box.half_area();
+    const T area = box.area();
     box.grow(isin::detail::Box<T>{});
     CHECK(box.lo.x == T(1));
     CHECK(box.hi.z == T(6));
-    CHECK(box.half_area() == area);
+    CHECK(box.area() == area);
     isin::detail::Box<T> empty;
     empty.grow(box);
-    CHECK(empty.half_area() == area);
+    CHECK(empty.area() == area);
 }
+
+namespace {
+
+// Every ray: the Bvh and the brute-force loop over intersect_watertight agree on hit or miss, and
+// on t (to rounding: the Bvh's lanes contract t's sum as the compiler may not); occluded agrees.
+template <class T>
+void check_against_brute_force(const isin::Bvh<T>& bvh, const std::vector<isin::Triangle<T>>& tris,
+                               const std::vector<isin::Ray<T>>& rays, int& hits) {
+    int missed = 0, invented = 0, far = 0;
+    for (const auto& ray : rays) {
+        const auto a = bvh.intersect(ray), b = brute_force(tris, ray);
+        hits += bool(b);
+        missed += b && !a;
+        invented += a && !b;
+        far += a && b && !(std::fabs(double(a.t) - double(b.t)) <= 1e-5 * double(b.t));
+        CHECK(bvh.occluded(ray, std::numeric_limits<T>::infinity()) == bool(b));
+    }
+    CHECK(missed == 0);
+    CHECK(invented == 0);
+    CHECK(far == 0);
+}
+
+// A ray from `from` through `to`, both far apart without overflow: the direction is taken from
+// halves.
+template <class T>
+isin::Ray<T> ray_through(const isin::Vertex<T>& from, const isin::Vertex<T>& to) {
+    return {from, to * T(0.5) - from * T(0.5)};
+}
+
+// Random triangles around random centres at `scale` (of size `size`·scale), and rays at them:
+// through random points of random triangles from random origins a few triangle sizes away, and
+// axis-parallel rays from outside the scene's box.
+template <class T>
+void garbage_case(double scale, double size, std::uint64_t seed, std::vector<isin::Triangle<T>>& tris,
+                  std::vector<isin::Ray<T>>& rays) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    const auto at = [&](double c) { return T(c * scale + scale * size * uni(rng)); };
+    for (int i = 0; i < 300; ++i) {
+        const double cx = uni(rng), cy = uni(rng), cz = uni(rng);
+        tris.push_back({{at(cx), at(cy), at(cz)}, {at(cx), at(cy), at(cz)}, {at(cx), at(cy), at(cz)}});
+    }
+    for (int r = 0; r < 300; ++r) {
+        const auto& tri = tris[std::size_t(r) % tris.size()];
+        const double u = (uni(rng) + 1) / 3, v = (uni(rng) + 1) / 3;
+        const auto mix = [&](T a, T b, T c) { return T(double(a) * (1 - u - v) + double(b) * u + double(c) * v); };
+        const isin::Vertex<T> target{mix(tri.v0.x, tri.v1.x, tri.v2.x), mix(tri.v0.y, tri.v1.y, tri.v2.y),
+                                     mix(tri.v0.z, tri.v1.z, tri.v2.z)};
+        const double reach = 4 * scale * size;
+        const isin::Vertex<T> origin{T(double(target.x) + reach * uni(rng)), T(double(target.y) + reach * uni(rng)),
+                                     T(double(target.z) + reach * uni(rng))};
+        rays.push_back(ray_through(origin, target));
+        isin::Vertex<T> from = target;
+        const int axis = r % 3;
+        (axis == 0 ? from.x : axis == 1 ? from.y : from.z) = T(-2 * scale);
+        isin::Vertex<T> d{0, 0, 0};
+        (axis == 0 ? d.x : axis == 1 ? d.y : d.z) = T(1);
+        rays.push_back({from, d});
+    }
+}
+
+} // namespace
+
+TEST_CASE_TEMPLATE("BVH: garbage geometry builds with bounded depth, and every triangle brute force hits is hit", T,
+                   float, double) {
+    // In the spirit of Embree's verify suite: NaN, ±∞, huge (up to ±max/2), tiny and subnormal
+    // coordinates, each on its own and all in one tree. Before the fix, centroids above max/2
+    // overflowed and subnormal extents made the bin scale ∞: bin indices came from NaN. Where the
+    // watertight test's products overflow or underflow T (edge functions ~ size², t·det ~
+    // size²·distance: anything at 1e38 in float) intersect_watertight hits nothing, and the Bvh
+    // must agree; "hittable" cases are sized so that it does hit.
+    constexpr bool is_float = sizeof(T) == sizeof(float);
+    const T max = std::numeric_limits<T>::max(), nan = std::numeric_limits<T>::quiet_NaN(),
+            inf = std::numeric_limits<T>::infinity();
+    struct Case {
+        const char* name;
+        double scale, size;
+        bool hittable; // products of the sizes fit T
+    };
+    const Case cases[] = {{"max/2", double(max) / 2, 1e-3, false},
+                          {"1e38", 1e38, 1e-3, !is_float},
+                          {"far", is_float ? 1e12 : 1e100, 1e-3, true},
+                          {"unit", 1, 1e-1, true},
+                          {"near zero", is_float ? 1e-9 : 1e-100, 1e-3, true},
+                          {"subnormal", double(std::numeric_limits<T>::denorm_min()) * 4096, 0.5, false},
+                          {"max/2, wide", double(max) / 2, 0.5, false}};
+    std::vector<isin::Triangle<T>> all;
+    std::vector<isin::Ray<T>> all_rays;
+    for (const Case& c : cases) {
+        CAPTURE(std::string(c.name));
+        std::vector<isin::Triangle<T>> tris;
+        std::vector<isin::Ray<T>> rays;
+        garbage_case<T>(c.scale, c.size, 7, tris, rays);
+        const isin::Bvh<T> bvh{tris};
+        CHECK(bvh.depth() <= isin::Bvh<T>::depth_limit);
+        int hits = 0;
+        check_against_brute_force(bvh, tris, rays, hits);
+        if (c.hittable) CHECK(hits > 400); // of 600 rays: the aimed ones hit about 9 in 10
+        all.insert(all.end(), tris.begin(), tris.end());
+        all_rays.insert(all_rays.end(), rays.begin(), rays.end());
+    }
+    // Everything in one tree, with non-finite triangles mixed in.
+    for (int i = 0; i < 50; ++i) {
+        all.push_back({{nan, 0, 0}, {0, 1, 0}, {1, 0, 0}});
+        all.push_back({{T(i), 0, inf}, {0, -inf, 0}, {1, 0, 0}});
+        all.push_back({{max, max, max}, {-max, max, max}, {max, -max, -max}}); // finite, area overflows: degenerate
+    }
+    const isin::Bvh<T> bvh{all};
+    CHECK(bvh.depth() <= isin::Bvh<T>::depth_limit);
+    int hits = 0;
+    check_against_brute_force(bvh, all, all_rays, hits);
+    CHECK(hits > 1200);
+}
+
+TEST_CASE_TEMPLATE("BVH: all centroids in one point (subnormal noise) and at ±max/2 (the D1 reproducers)", T, float,
+                   double) {
+    const T max = std::numeric_limits<T>::max(), tiny = std::numeric_limits<T>::denorm_min();
+    std::vector<isin::Triangle<T>> noise, edge;
+    for (int i = 0; i < 200; ++i) { // unit triangles whose centroids differ by a few subnormals
+        const T e = T(i % 7) * tiny;
+        noise.push_back({{e, 0, 5}, {1, e, 5}, {0, 1, 5 + e}});
+        const T x = (i % 2 ? T(1) : T(-1)) * max * T(0.75); // centroid (lo + hi)/2 overflowed here
+        edge.push_back({{x, T(i), 0}, {x, T(i + 1), 0}, {x, T(i), 1}});
+    }
+    for (const auto* tris : {&noise, &edge}) {
+        const isin::Bvh<T> bvh{*tris};
+        CHECK(bvh.size() == tris->size());
+        CHECK(bvh.depth() <= isin::Bvh<T>::depth_limit);
+    }
+    const isin::Bvh<T> bvh{noise};
+    const auto h = bvh.intersect(isin::Ray<T>{{T(0.25), T(0.25), 0}, {0, 0, 1}});
+    REQUIRE(h);
+    CHECK(h.t == approx(5));
+    const isin::Bvh<T> far{edge};
+    const isin::Ray<T> at_edge{{max * T(0.5), T(11.25), T(0.25)}, {1, 0, 0}}; // triangle 11, at x = +0.75 max
+    const auto g = far.intersect(at_edge);
+    CHECK(bool(g) == bool(brute_force(edge, at_edge)));
+    REQUIRE(g);
+}
+
+TEST_CASE("BVH: a million identical triangles build (median splits) and are hit") {
+    const std::vector<isin::Triangle<float>> tris(1000000, isin::Triangle<float>{{0, 0, 5}, {0, 1, 5}, {1, 0, 5}});
+    const isin::Bvh<float> bvh{tris};
+    CHECK(bvh.size() == tris.size());
+    CHECK(bvh.depth() <= isin::Bvh<float>::depth_limit);
+    const auto h = bvh.intersect(isin::Ray<float>{{0.25f, 0.25f, 0}, {0, 0, 1}});
+    REQUIRE(h);
+    CHECK(h.t == 5.0f);
+    CHECK(bvh.occluded(isin::Ray<float>{{0.25f, 0.25f, 0}, {0, 0, 1}}, 6.0f));
+    CHECK_FALSE(bvh.intersect(isin::Ray<float>{{1.25f, 0.25f, 0}, {0, 0, 1}}));
+}
+
+TEST_CASE_TEMPLATE("BVH leaves: thin triangles with a vertex near the largest T decide as intersect_watertight", T,
+                   float, double) {
+    // D7: the AVX2 leaf formed the edge functions' products in float, which overflowed for a
+    // vertex at 2.04e38, so Kahan's error term was ∞ − ∞ and hits of intersect_watertight were
+    // missed (occluded said false). Now each lane computes what the scalar test computes.
+    std::mt19937_64 rng(1);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    const double far = sizeof(T) == sizeof(float) ? 2.04e38 : 1.3e308;
+    int hits = 0, disagree = 0;
+    for (int k = 0; k < 3000; ++k) {
+        const std::vector<isin::Triangle<T>> tris{{{T(uni(rng) * 2), T(uni(rng) * 2), 5},
+                                                   {T(uni(rng) * 2), T(uni(rng) * 2), 5},
+                                                   {T(uni(rng) * far), T(uni(rng) * far), T(5 + uni(rng) * 10)}}};
+        const isin::Bvh<T> bvh{tris};
+        for (int r = 0; r < 10; ++r) {
+            const isin::Ray<T> ray{{T(uni(rng) * 3), T(uni(rng) * 3), 0},
+                                   isin::normalize(isin::Vertex<T>{T(uni(rng) * 0.3), T(uni(rng) * 0.3), 1})};
+            const auto want = isin::intersect_watertight(ray, tris[0]);
+            const auto got = bvh.intersect(ray);
+            hits += bool(want);
+            disagree += bool(want) != bool(got) || bool(want) != bvh.occluded(ray, std::numeric_limits<T>::infinity());
+            if (want && got) CHECK(double(got.t) == approx(double(want.t)).epsilon(1e-5));
+        }
+    }
+    CHECK(hits > 100);
+    CHECK(disagree == 0);
+}
+
+TEST_CASE("BVH build: threads that cannot start leave their work to the others, same answers (D4)") {
+    const auto tris = random_soup<float>(200000, 5);
+    isin::BvhOptions one;
+    one.threads = 1;
+    const isin::Bvh<float> reference{tris, one};
+    std::vector<isin::Ray<float>> rays;
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (int r = 0; r < 500; ++r)
+        rays.push_back({{float(uni(rng) * 15), float(uni(rng) * 15), -20.0f},
+                        isin::normalize(isin::Vertex<float>{float(uni(rng) * 0.5), float(uni(rng) * 0.5), 1})});
+    const auto result = without_threads([&] {
+        isin::BvhOptions many;
+        many.threads = 4; // subtrees and chunks ask for threads; none starts
+        const isin::Bvh<float> bvh{tris, many};
+        for (const auto& ray : rays)
+            if (bvh.intersect(ray).t != reference.intersect(ray).t) return false;
+        return bvh.size() == reference.size();
+    });
+    if (result == WithoutThreads::not_run) MESSAGE("not run: threads still start in a child under RLIMIT_NPROC = 0");
+    else CHECK(result == WithoutThreads::passed);
+}
+
+#ifdef ISIN_TEST_REPLACES_NEW
+TEST_CASE("BVH build: std::bad_alloc in a build worker reaches the constructor, not std::terminate (D4)") {
+    const auto tris = random_soup<float>(200000, 5);
+    isin::BvhOptions options;
+    options.threads = 2;
+    fail_off_main_thread = true;
+    bool threw = false;
+    try {
+        const isin::Bvh<float> bvh{tris, options};
+    } catch (const std::bad_alloc&) {
+        threw = true;
+    }
+    fail_off_main_thread = false;
+    CHECK(threw);
+    const isin::Bvh<float> after{tris, options}; // and nothing is left broken
+    CHECK(after.size() == tris.size());
+}
+#endif

@@ -18,9 +18,11 @@
 #include <limits>
 #include <memory>
 #include <thread>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
+#include "detail/parallel.hpp"
 #include "ray.hpp"
 #include "triangle.hpp"
 #include "vec.hpp"
@@ -32,6 +34,11 @@
 #endif
 #if defined(__AVX__)
 #include <immintrin.h>
+#endif
+#if defined(__GNUC__) || defined(__clang__)
+#define ISIN_DETAIL_COLD __attribute__((noinline, cold)) // a rare path kept out of the hot loop
+#else
+#define ISIN_DETAIL_COLD
 #endif
 
 namespace isin {
@@ -73,8 +80,14 @@ struct Box {
         lo = {std::min(lo.x, b.lo.x), std::min(lo.y, b.lo.y), std::min(lo.z, b.lo.z)};
         hi = {std::max(hi.x, b.hi.x), std::max(hi.y, b.hi.y), std::max(hi.z, b.hi.z)};
     }
-    [[nodiscard]] T half_area() const noexcept {
-        const Vertex<T> e = hi - lo;
+    /// The SAH's measure of the surface: a quarter of the half area, from half extents, so that
+    /// no box of finite coordinates gives NaN (an extent hi − lo would overflow for coordinates
+    /// beyond ±max/2, and ∞·0 is NaN). Boxes wider than about √max (1.8e19 in float) measure +∞:
+    /// their costs compare as unknown and the build splits them at the median. Only ratios of
+    /// it matter. 0 for an empty box.
+    using Area = T;
+    [[nodiscard]] T area() const noexcept {
+        const Vertex<T> e = hi * T(0.5) - lo * T(0.5);
         return e.x < T(0) ? T(0) : e.x * e.y + e.y * e.z + e.z * e.x;
     }
 };
@@ -136,7 +149,7 @@ struct BinaryNode {
     // left subtree and up to j − i from the right. An 8-wide node made here takes wide_split
     // children from the left subtree and up to 8 − wide_split from the right.
     static constexpr std::uint8_t merged = 0xff;
-    T cost[8] = {};
+    typename Box<T>::Area cost[8] = {};
     std::uint8_t how[8] = {};
     std::uint8_t wide_split = 1;
     [[nodiscard]] bool leaf() const noexcept { return !left; }
@@ -180,12 +193,18 @@ public:
     /// Number of 8-wide nodes and of leaf blocks.
     [[nodiscard]] std::size_t node_count() const noexcept { return nodes_.size(); }
     [[nodiscard]] std::size_t leaf_count() const noexcept { return blocks_.size(); }
+    /// Levels of 8-wide nodes on the longest path from the root to a leaf (0 when empty). Never
+    /// above depth_limit, whatever the triangles: the build splits at the median below a fixed
+    /// depth, and primitives are counted in 32 bits.
+    [[nodiscard]] int depth() const noexcept { return nodes_.empty() ? 0 : depth_below(0); }
+    static constexpr int depth_limit = 40 + 32;
 
 private:
     static constexpr std::uint32_t leaf_bit = 0x80000000u;
     static constexpr std::uint32_t empty_child = 0xffffffffu;
     // SAH costs per unit of box area of visiting an 8-wide node and of testing a leaf block.
-    static constexpr T node_cost = T(1), leaf_cost = T(1);
+    using Area = typename detail::Box<T>::Area;
+    static constexpr Area node_cost = Area(1), leaf_cost = Area(1);
 
     // 8 children: boxes in structure-of-arrays order, child references (node index, or leaf
     // block index | leaf_bit, or empty_child whose box is empty: lo = +∞ > hi = −∞).
@@ -193,8 +212,9 @@ private:
         T lo[3][8], hi[3][8];
         std::uint32_t child[8];
     };
-    // Up to 8 triangles, vertex-major, structure-of-arrays; unused lanes are all-zero triangles
-    // (their edge functions are 0, det = 0: never hit).
+    // Up to 8 triangles, vertex-major, structure-of-arrays. Unused lanes (padding) repeat lane 0,
+    // triangle and index: a hit there ties with lane 0's, which wins, so lane tests need no mask
+    // for them, and their values are as trustworthy as lane 0's.
     struct alignas(64) Block {
         T v[3][3][8]; // [vertex][axis][lane]
         std::uint32_t primitive[8];
@@ -210,13 +230,12 @@ private:
     // ---- build -------------------------------------------------------------------------
     void build(const std::vector<Triangle<T>>& triangles, const BvhOptions& options) {
         triangles_ = &triangles;
-        const int hw = int(std::thread::hardware_concurrency());
-        const int threads = std::max(1, options.threads > 0 ? options.threads : hw);
+        const int threads = detail::thread_count(options.threads);
         // The primitives (box, centroid) of the triangles, in chunks; unusable triangles (not
         // finite, zero area) are marked and then left out.
         Prims prims(triangles.size());
         std::atomic<bool> unusable{false};
-        parallel_chunks(triangles.size(), threads, [&](int, std::size_t begin, std::size_t end) {
+        detail::parallel_chunks(triangles.size(), threads, parallel_min, [&](std::size_t begin, std::size_t end) {
             bool skipped = false;
             for (std::size_t i = begin; i < end; ++i) {
                 const Triangle<T>& tri = triangles[i];
@@ -232,7 +251,7 @@ private:
                 b.grow(tri.v0), b.grow(tri.v1), b.grow(tri.v2);
                 for (int a = 0; a < 3; ++a) {
                     p.lo[a] = component(b.lo, a), p.hi[a] = component(b.hi, a);
-                    p.centroid[a] = (p.lo[a] + p.hi[a]) * T(0.5);
+                    p.centroid[a] = p.lo[a] * T(0.5) + p.hi[a] * T(0.5); // (lo + hi)/2 would overflow above max/2
                 }
                 p.lo[3] = p.hi[3] = p.centroid[3] = T(0);
                 p.index = static_cast<std::uint32_t>(i);
@@ -244,12 +263,15 @@ private:
                         prims.end());
         primitives_ = prims.size();
         nodes_.clear(), blocks_.clear();
+        bound_ = T(0);
         if (prims.empty()) return;
         leaf_size_ = std::clamp(options.leaf_size, 1, 8);
         std::atomic<int> threads_left{threads - 1};
         detail::Box4<T> box, centroids;
         for (const Prim& p : prims) box.grow(p.lo, p.hi), centroids.grow(p.centroid, p.centroid);
-        auto root = build_binary(prims, 0, static_cast<std::uint32_t>(prims.size()), box.box(), centroids.box(), 0,
+        const detail::Box<T> root_box = box.box();
+        bound_ = std::max(max_abs(root_box.lo), max_abs(root_box.hi));
+        auto root = build_binary(prims, 0, static_cast<std::uint32_t>(prims.size()), root_box, centroids.box(), 0,
                                  threads_left);
         nodes_.reserve(prims.size() / 4 + 1);
         leaves_.clear();
@@ -263,36 +285,50 @@ private:
         }
         // The leaves' triangles, gathered into blocks: the collapse's costly part, in chunks.
         blocks_.resize(leaves_.size());
-        parallel_chunks(leaves_.size(), threads, [&](int, std::size_t begin, std::size_t end) {
+        detail::parallel_chunks(leaves_.size(), threads, parallel_min, [&](std::size_t begin, std::size_t end) {
             for (std::size_t k = begin; k < end; ++k) fill_block(blocks_[k], prims, leaves_[k].first, leaves_[k].count);
         });
         leaves_ = {};
         triangles_ = nullptr;
     }
 
-    // Runs f(part, begin, end) over [0, n) cut into up to `threads` parts of at least 32768
-    // items, part 0 on this thread; if a thread cannot be started, its part runs here too.
-    template <class F>
-    static void parallel_chunks(std::size_t n, int threads, const F& f) {
-        const std::size_t parts = std::max<std::size_t>(1, std::min(std::size_t(threads), n / 32768));
-        const std::size_t chunk = (n + parts - 1) / std::max<std::size_t>(parts, 1);
-        std::vector<std::thread> workers;
-        std::size_t next = 1; // the first part not handed to a worker
-        try {
-            for (; next < parts; ++next)
-                workers.emplace_back(f, int(next), std::min(n, next * chunk), std::min(n, (next + 1) * chunk));
-        } catch (...) { // no more threads: the remaining parts run here
+    // Parallel loops of the build take chunks of at least this many items, and a subtree gets
+    // a thread of its own from this many primitives on.
+    static constexpr std::size_t parallel_min = 32768;
+    static constexpr std::uint32_t subtree_thread_min = 65536;
+    // The binary build splits by SAH down to this depth, and at the median below it, so the tree
+    // is at most sah_depth + 32 levels deep for any input (the traversal stack is sized by it).
+    static constexpr int sah_depth = depth_limit - 32;
+    static constexpr int bins = 8; // 16 or 32 trace no faster on the vs_embree meshes and build 20-40% slower
+
+    // Where a centroid falls among the bins of each axis: ⌊(c − lo)·bins·(1 − ε)/extent⌋, computed
+    // from halves (0.5c − 0.5lo) so that no finite coordinates overflow, at most bins − 1. An axis whose extent is 0, or so small that the scale overflows (subnormal
+    // noise), has scale 0 and is not binned.
+    struct Binning {
+        T half_lo[3], scale[3];
+        Binning(const detail::Box<T>& centroids) noexcept {
+            for (int a = 0; a < 3; ++a) {
+                half_lo[a] = component(centroids.lo, a) * T(0.5);
+                const T half_extent = component(centroids.hi, a) * T(0.5) - half_lo[a];
+                const T s = T(bins) * (T(1) - std::numeric_limits<T>::epsilon()) / half_extent;
+                scale[a] = half_extent > T(0) && s < std::numeric_limits<T>::infinity() ? s : T(0);
+            }
         }
-        f(0, std::size_t(0), std::min(n, chunk));
-        for (std::size_t k = next; k < parts; ++k) f(int(k), std::min(n, k * chunk), std::min(n, (k + 1) * chunk));
-        for (std::thread& w : workers) w.join();
-    }
+        [[nodiscard]] bool any() const noexcept { return scale[0] > T(0) || scale[1] > T(0) || scale[2] > T(0); }
+        [[nodiscard]] int bin(const Prim& p, int a) const noexcept {
+            // The centroids lie within the bounds the scale came from, so f is in [0, bins] (no
+            // NaN, no overflow: scale is finite and the difference at most the half extent); the
+            // integer is clamped because rounding can reach bins itself.
+            const int i = int((p.centroid[a] * T(0.5) - half_lo[a]) * scale[a]);
+            return i < bins ? i : bins - 1;
+        }
+    };
 
     // Binary SAH build of prims[first, first + count), whose box and centroid bounds the caller
-    // knows. One pass bins the centroids on all three axes (8 bins); the sweep gives the
-    // children's boxes and centroid bounds, so no level re-reads its primitives for them. Past
-    // depth 40 it splits at the median of the widest axis, which bounds the depth (and so the
-    // traversal stack) for any input.
+    // knows. One pass bins the centroids on all three axes; the sweep gives the children's boxes
+    // and centroid bounds, so no level re-reads its primitives for them. Below sah_depth, or when
+    // no axis can be binned (all centroids within rounding of each other), it splits at the
+    // median of the widest axis, which bounds the depth (and so the traversal stack) for any input.
     std::unique_ptr<detail::BinaryNode<T>> build_binary(Prims& prims, std::uint32_t first,
                                                         std::uint32_t count, const detail::Box<T>& box,
                                                         const detail::Box<T>& centroids, int depth,
@@ -301,55 +337,48 @@ private:
         node->box = box, node->first = first, node->count = count;
         if (count <= 2 && count <= std::uint32_t(leaf_size_)) return node;
 
-        constexpr int bins = 8; // 16 or 32 trace no faster on the vs_embree meshes and build 20-40% slower
         struct Bin {
             detail::Box4<T> box, centroids;
             std::uint32_t n = 0;
         };
         Bin bin[3][bins];
-        const Vertex<T> extent = centroids.hi - centroids.lo;
-        T scale[3], lo[3];
-        for (int a = 0; a < 3; ++a) {
-            const T e = component(extent, a);
-            scale[a] = e > T(0) ? T(bins) * (T(1) - std::numeric_limits<T>::epsilon()) / e : T(0);
-            lo[a] = component(centroids.lo, a);
-        }
-        const bool binned = depth < 40 && (extent.x > T(0) || extent.y > T(0) || extent.z > T(0));
+        const Binning binning(centroids);
+        const bool binned = depth < sah_depth && binning.any();
         if (binned)
             for (std::uint32_t i = first; i < first + count; ++i) {
                 const Prim& p = prims[i];
                 for (int a = 0; a < 3; ++a) {
-                    Bin& b = bin[a][int((p.centroid[a] - lo[a]) * scale[a])];
+                    Bin& b = bin[a][binning.bin(p, a)];
                     b.box.grow(p.lo, p.hi), b.centroids.grow(p.centroid, p.centroid), ++b.n;
                 }
             }
         // Sweep: cost = Σ area · count over the two sides.
-        T best_cost = std::numeric_limits<T>::infinity(), best_areas = best_cost;
+        Area best_cost = std::numeric_limits<Area>::infinity(), best_areas = best_cost;
         int best_axis = -1, best_split = 0;
         for (int a = 0; a < 3 && binned; ++a) {
-            if (!(scale[a] > T(0))) continue;
-            T right_area[bins];
+            if (!(binning.scale[a] > T(0))) continue;
+            Area right_area[bins];
             std::uint32_t right_n[bins];
             detail::Box<T> acc;
             std::uint32_t acc_n = 0;
             for (int b = bins - 1; b > 0; --b)
-                acc.grow(bin[a][b].box.box()), acc_n += bin[a][b].n, right_area[b] = acc.half_area(), right_n[b] = acc_n;
+                acc.grow(bin[a][b].box.box()), acc_n += bin[a][b].n, right_area[b] = acc.area(), right_n[b] = acc_n;
             acc = {}, acc_n = 0;
             for (int b = 0; b < bins - 1; ++b) {
                 acc.grow(bin[a][b].box.box()), acc_n += bin[a][b].n;
                 if (acc_n == 0 || right_n[b + 1] == 0) continue;
-                const T cost = acc.half_area() * T(acc_n) + right_area[b + 1] * T(right_n[b + 1]);
-                if (cost < best_cost) best_cost = cost, best_axis = a, best_split = b, best_areas = acc.half_area() + right_area[b + 1];
+                const Area cost = acc.area() * Area(acc_n) + right_area[b + 1] * Area(right_n[b + 1]);
+                if (cost < best_cost) best_cost = cost, best_axis = a, best_split = b, best_areas = acc.area() + right_area[b + 1];
             }
         }
         // Up to leaf_size triangles cost one 8-lane test as a leaf, as each child would: split
         // only when the two children's boxes together have well under this box's area (the
         // ratio measured on the vs_embree meshes: 0.5 to 0.7 trace alike, 1.0 builds 40% longer
         // for no gain, per-triangle SAH costs likewise).
-        constexpr T split_area_ratio = T(0.6);
-        if (count <= std::uint32_t(leaf_size_) && !(best_areas < split_area_ratio * box.half_area())) return node;
+        constexpr Area split_area_ratio = Area(0.6);
+        if (count <= std::uint32_t(leaf_size_) && !(best_areas < split_area_ratio * box.area())) return node;
 
-        std::uint32_t mid;
+        std::uint32_t mid = first;
         detail::Box<T> left_box, right_box, left_centroids, right_centroids;
         if (best_axis >= 0) {
             const int a = best_axis;
@@ -359,10 +388,12 @@ private:
                 if (bin[a][b].n) side.grow(bin[a][b].box.box()), side_c.grow(bin[a][b].centroids.box());
             }
             const auto middle = std::partition(prims.begin() + first, prims.begin() + first + count, [&](const Prim& p) {
-                return int((p.centroid[a] - lo[a]) * scale[a]) <= best_split;
+                return binning.bin(p, a) <= best_split; // the binning's own rule: the sweep's counts
             });
             mid = static_cast<std::uint32_t>(middle - prims.begin());
-        } else { // deep, or all centroids coincide: split at the median of the widest axis
+        }
+        if (mid == first || mid == first + count) { // deep, or no axis binned: the median of the widest axis
+            const Vertex<T> extent = centroids.hi * T(0.5) - centroids.lo * T(0.5);
             const int a = extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2) : (extent.y >= extent.z ? 1 : 2);
             mid = first + count / 2;
             std::nth_element(prims.begin() + first, prims.begin() + mid, prims.begin() + first + count,
@@ -374,21 +405,28 @@ private:
         }
 
         const std::uint32_t left_count = mid - first, right_count = count - left_count;
-        if (count > 65536 && threads_left.fetch_sub(1) > 0) { // a large subtree on its own thread
-            std::unique_ptr<detail::BinaryNode<T>> left;
-            std::thread worker([&] {
-                left = build_binary(prims, first, left_count, left_box, left_centroids, depth + 1, threads_left);
-            });
+        const auto build_left = [&] {
+            node->left = build_binary(prims, first, left_count, left_box, left_centroids, depth + 1, threads_left);
+        };
+        const auto build_right = [&] {
             node->right = build_binary(prims, mid, right_count, right_box, right_centroids, depth + 1, threads_left);
-            worker.join();
-            node->left = std::move(left);
+        };
+        if (count >= subtree_thread_min && threads_left.fetch_sub(1) > 0) { // a large subtree on its own thread
+            detail::fork_join(build_left, build_right);
             threads_left.fetch_add(1);
         } else {
-            threads_left.fetch_add(count > 65536 ? 1 : 0); // undo the failed claim
-            node->left = build_binary(prims, first, left_count, left_box, left_centroids, depth + 1, threads_left);
-            node->right = build_binary(prims, mid, right_count, right_box, right_centroids, depth + 1, threads_left);
+            if (count >= subtree_thread_min) threads_left.fetch_add(1); // undo the failed claim
+            build_left();
+            build_right();
         }
         return node;
+    }
+
+    [[nodiscard]] int depth_below(std::uint32_t node) const noexcept {
+        int deepest = 0;
+        for (const std::uint32_t c : nodes_[node].child)
+            if (c != empty_child && !(c & leaf_bit)) deepest = std::max(deepest, depth_below(c));
+        return deepest + 1;
     }
 
     static void clear(Node& n) noexcept {
@@ -409,34 +447,36 @@ private:
         return static_cast<std::uint32_t>(leaves_.size() - 1) | leaf_bit;
     }
 
-    // Block `b` holds the triangles of prims[first, first + count); unused lanes are zero.
+    // Block `b` holds the triangles of prims[first, first + count); unused lanes repeat lane 0
+    // (Block: padding).
     void fill_block(Block& b, const Prims& prims, std::uint32_t first, std::uint32_t count) const noexcept {
         for (int k = 0; k < 8; ++k) {
-            const bool used = std::uint32_t(k) < count;
-            const std::uint32_t index = used ? prims[first + std::uint32_t(k)].index : empty_child;
-            const Triangle<T>* tri = used ? &(*triangles_)[index] : nullptr;
-            const Vertex<T> zero{};
-            const Vertex<T>* vs[3] = {used ? &tri->v0 : &zero, used ? &tri->v1 : &zero, used ? &tri->v2 : &zero};
+            const std::uint32_t index = prims[first + (std::uint32_t(k) < count ? std::uint32_t(k) : 0u)].index;
+            const Triangle<T>& tri = (*triangles_)[index];
+            const Vertex<T>* vs[3] = {&tri.v0, &tri.v1, &tri.v2};
             for (int v = 0; v < 3; ++v)
                 for (int a = 0; a < 3; ++a) b.v[v][a][k] = component(*vs[v], a);
             b.primitive[k] = index;
         }
     }
 
+    // Whether lane k of a block is padding: a repeat of lane 0 (no triangle is in a leaf twice).
+    static bool padding(const Block& b, int k) noexcept { return k > 0 && b.primitive[k] == b.primitive[0]; }
+
     // Plans the collapse of the binary tree into 8-wide nodes for the least SAH cost, visiting
     // a node costing `node_cost` and testing a leaf block `leaf_cost` per unit of box area
     // (Ylitie, Karras & Laine 2017, §3.1, with whole subtrees of up to leaf_size triangles
     // allowed to become one leaf). Fills BinaryNode::cost, how and wide_split, bottom-up.
     void plan(detail::BinaryNode<T>& n) const {
-        const T area = n.box.half_area();
+        const Area area = n.box.area();
         if (n.leaf()) {
             for (int j = 0; j < 8; ++j) n.cost[j] = leaf_cost * area, n.how[j] = 0;
             return;
         }
         plan(*n.left), plan(*n.right);
-        T wide = std::numeric_limits<T>::infinity();
+        Area wide = std::numeric_limits<Area>::infinity();
         for (int i = 1; i < 8; ++i) {
-            const T c = n.left->cost[i - 1] + n.right->cost[7 - i];
+            const Area c = n.left->cost[i - 1] + n.right->cost[7 - i];
             if (c < wide) wide = c, n.wide_split = std::uint8_t(i);
         }
         wide += node_cost * area;
@@ -445,7 +485,7 @@ private:
         for (int j = 2; j <= 8; ++j) {
             n.cost[j - 1] = n.cost[0], n.how[j - 1] = n.how[0];
             for (int i = 1; i < j; ++i) {
-                const T c = n.left->cost[i - 1] + n.right->cost[j - i - 1];
+                const Area c = n.left->cost[i - 1] + n.right->cost[j - i - 1];
                 if (c < n.cost[j - 1]) n.cost[j - 1] = c, n.how[j - 1] = std::uint8_t(i);
             }
         }
@@ -479,7 +519,7 @@ private:
 
     // ---- traversal ---------------------------------------------------------------------
     struct RayData {
-        T org[3], inv[3];
+        T org[3], inv[3]; // inv is ±∞ for a ±0 direction component
         // inv·(1 + 2γ₃) for exit distances (Ize 2013, pbrt): however p·inv − o·inv is rounded
         // (inv, this product, the FMA or the difference and product: each at most u relative),
         // the exit distance comes out no smaller than the exact one, so rounding never drops a
@@ -494,11 +534,17 @@ private:
         std::size_t near_plane[3], far_plane[3];
         detail::WatertightShear<T> shear; // set when the ray reaches its first leaf
         bool ok;
+        // The slab test's form for this ray. Fast: p·inv − o·inv in one FMA, when no product can
+        // overflow (every inv finite, |p|·|inv| and |o|·|inv| well below the largest T for every
+        // p of the tree). Robust otherwise (a direction component 0 or tiny, coordinates near
+        // the largest T): (p − o)·inv, which gives ±∞ but no NaN except 0·∞ for a ray in a slab's
+        // plane, and that NaN is ignored by the min/max (the slab does not bound the ray).
+        bool robust;
     };
 
     // Per-ray set-up, with as few branches as it can: most rays of a frame cost a few node
     // visits, so this is a fair part of their time.
-    static RayData prepare(const Ray<T>& ray) noexcept {
+    RayData prepare(const Ray<T>& ray) const noexcept {
         RayData r;
         const Vertex<T>& o = ray.origin;
         const Vertex<T>& d = ray.direction;
@@ -507,23 +553,25 @@ private:
         // x − x is 0 for a finite x and NaN otherwise
         const T finite = ((o.x - o.x) + (o.y - o.y)) + ((o.z - o.z) + (d.x - d.x)) + ((d.y - d.y) + (d.z - d.z));
         r.ok = (finite == T(0)) & (std::max(ax, std::max(ay, az)) > T(0));
-        constexpr T tiny = sizeof(T) == 4 ? T(1e-18) : T(1e-150);
         constexpr T u = std::numeric_limits<T>::epsilon() / 2, widen = T(1) + T(2) * (T(3) * u / (T(1) - T(3) * u));
+        constexpr T no_overflow = std::numeric_limits<T>::max() / T(8);
+        bool fast = true;
         for (int a = 0; a < 3; ++a) {
             const T da = component(d, a);
-            const T safe = std::copysign(std::max(std::fabs(da), tiny), da); // ±0 → ±tiny: no 0·∞ = NaN
             r.org[a] = component(o, a);
-            r.inv[a] = T(1) / safe;
+            r.inv[a] = T(1) / da;
             r.inv_far[a] = r.inv[a] * widen;
+            fast &= std::max(bound_, std::fabs(r.org[a])) * std::fabs(r.inv_far[a]) < no_overflow; // false for ∞
             const T org_inv = r.org[a] * r.inv[a], org_inv_far = r.org[a] * r.inv_far[a];
             constexpr T allowance = T(4) * std::numeric_limits<T>::epsilon();
             r.org_inv_near[a] = org_inv + allowance * std::fabs(org_inv);
             r.org_inv_far[a] = org_inv_far - allowance * std::fabs(org_inv_far);
-            const bool near_is_lo = !std::signbit(safe);
+            const bool near_is_lo = !std::signbit(da);
             const std::size_t lo = std::size_t(a) * sizeof(Node::lo[0]), hi = sizeof(Node::lo) + lo;
             r.near_plane[a] = near_is_lo ? lo : hi;
             r.far_plane[a] = near_is_lo ? hi : lo;
         }
+        r.robust = !fast;
         return r;
     }
 
@@ -534,6 +582,9 @@ private:
 
     // Slab test of the 8 children: bit k set when child k's box is entered before `t_far`.
     // Exits are computed with RayData::inv_far, so that no rounding drops a box the ray touches.
+    // `robust` selects RayData::robust's form; the portable forms are always robust. Every
+    // max/min takes the slab's value first: a NaN there yields the other operand.
+    template <bool robust>
     static unsigned hit_children(const Node& n, const RayData& r, T t_far, T (&t_near)[8]) noexcept {
 #if defined(__AVX__)
         if constexpr (sizeof(T) == sizeof(float)) { // 8 boxes in one 256-bit register per plane
@@ -542,19 +593,26 @@ private:
                 const __m256 near_plane = _mm256_load_ps(plane(n, r.near_plane[a]));
                 const __m256 far_plane = _mm256_load_ps(plane(n, r.far_plane[a]));
 #if defined(__FMA__)
-                // p·inv − o·inv in one FMA; o·inv is rounded, so the entry subtracts and the exit
-                // adds the per-ray allowance (prepare: org_inv_near / org_inv_far).
-                t0[a] = _mm256_fmsub_ps(near_plane, _mm256_set1_ps(float(r.inv[a])), _mm256_set1_ps(float(r.org_inv_near[a])));
-                t1[a] = _mm256_fmsub_ps(far_plane, _mm256_set1_ps(float(r.inv_far[a])), _mm256_set1_ps(float(r.org_inv_far[a])));
-#else
+                if constexpr (!robust) {
+                    // p·inv − o·inv in one FMA; o·inv is rounded, so the entry subtracts and the
+                    // exit adds the per-ray allowance (prepare: org_inv_near / org_inv_far).
+                    t0[a] = _mm256_fmsub_ps(near_plane, _mm256_set1_ps(float(r.inv[a])), _mm256_set1_ps(float(r.org_inv_near[a])));
+                    t1[a] = _mm256_fmsub_ps(far_plane, _mm256_set1_ps(float(r.inv_far[a])), _mm256_set1_ps(float(r.org_inv_far[a])));
+                    continue;
+                }
+#endif
                 const __m256 org = _mm256_set1_ps(float(r.org[a]));
                 t0[a] = _mm256_mul_ps(_mm256_sub_ps(near_plane, org), _mm256_set1_ps(float(r.inv[a])));
                 t1[a] = _mm256_mul_ps(_mm256_sub_ps(far_plane, org), _mm256_set1_ps(float(r.inv_far[a])));
-#endif
             }
-            // two levels of max / min, not three: this is the traversal's critical path
-            const __m256 tn = _mm256_max_ps(_mm256_max_ps(t0[0], t0[1]), _mm256_max_ps(t0[2], _mm256_setzero_ps()));
-            const __m256 tf = _mm256_min_ps(_mm256_min_ps(t1[0], t1[1]), _mm256_min_ps(t1[2], _mm256_set1_ps(float(t_far))));
+            __m256 tn, tf;
+            if constexpr (robust) { // _mm256_max_ps(a, b) is b when either is NaN
+                tn = _mm256_max_ps(t0[2], _mm256_max_ps(t0[1], _mm256_max_ps(t0[0], _mm256_setzero_ps())));
+                tf = _mm256_min_ps(t1[2], _mm256_min_ps(t1[1], _mm256_min_ps(t1[0], _mm256_set1_ps(float(t_far)))));
+            } else { // two levels of max / min, not three: this is the traversal's critical path
+                tn = _mm256_max_ps(_mm256_max_ps(t0[0], t0[1]), _mm256_max_ps(t0[2], _mm256_setzero_ps()));
+                tf = _mm256_min_ps(_mm256_min_ps(t1[0], t1[1]), _mm256_min_ps(t1[2], _mm256_set1_ps(float(t_far))));
+            }
             _mm256_storeu_ps(reinterpret_cast<float*>(t_near), tn);
             return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ)));
         }
@@ -566,8 +624,8 @@ private:
             std::memcpy(&near_plane, plane(n, r.near_plane[a]), sizeof near_plane);
             std::memcpy(&far_plane, plane(n, r.far_plane[a]), sizeof far_plane);
             const V near = (near_plane - r.org[a]) * r.inv[a], far = (far_plane - r.org[a]) * r.inv_far[a];
-            tn = tn > near ? tn : near;
-            tf = tf < far ? tf : far;
+            tn = near > tn ? near : tn;
+            tf = far < tf ? far : tf;
         }
         std::memcpy(t_near, &tn, sizeof t_near);
         const auto inside = tn <= tf;
@@ -579,8 +637,10 @@ private:
         for (int k = 0; k < 8; ++k) {
             T tn = T(0), tf = t_far;
             for (int a = 0; a < 3; ++a) {
-                tn = std::max(tn, (plane(n, r.near_plane[a])[k] - r.org[a]) * r.inv[a]);
-                tf = std::min(tf, (plane(n, r.far_plane[a])[k] - r.org[a]) * r.inv_far[a]);
+                const T near = (plane(n, r.near_plane[a])[k] - r.org[a]) * r.inv[a];
+                const T far = (plane(n, r.far_plane[a])[k] - r.org[a]) * r.inv_far[a];
+                tn = near > tn ? near : tn;
+                tf = far < tf ? far : tf;
             }
             t_near[k] = tn;
             mask |= unsigned(tn <= tf) << k;
@@ -614,7 +674,7 @@ private:
         bool found = false;
         const Vertex<T> o{r.org[0], r.org[1], r.org[2]};
         for (int k = 0; k < 8; ++k) {
-            if (b.primitive[k] == empty_child) break;
+            if (padding(b, k)) break;
             Vertex<T> p[3]; // the vertices relative to the origin
             for (int v = 0; v < 3; ++v) p[v] = Vertex<T>{b.v[v][0][k], b.v[v][1][k], b.v[v][2][k]} - o;
             const Hit<T> h = detail::intersect_sheared(p[0], p[1], p[2], r.shear, false);
@@ -626,39 +686,108 @@ private:
     }
 
 #if defined(__AVX2__) && defined(__FMA__)
-    // a·b − c·d on 8 float lanes, sign exact: Kahan's difference of products with explicit FMA.
-    static __m256 difference_of_products8(__m256 a, __m256 b, __m256 c, __m256 d) noexcept {
-        const __m256 cd = _mm256_mul_ps(c, d);
-        const __m256 error = _mm256_fmsub_ps(c, d, cd);  // c·d − cd, exact
-        const __m256 ab_minus_cd = _mm256_fmsub_ps(a, b, cd);
-        return _mm256_sub_ps(ab_minus_cd, error);
+    // The 8 triangles of a block relative to the ray's origin, sheared onto its frame (WBW §3):
+    // x, y across the ray, z along it (not yet scaled by Sz).
+    struct Sheared8 {
+        __m256 x[3], y[3], z[3];
+        Sheared8(const Block& b, const RayData& r) noexcept {
+            const __m256 ox = _mm256_set1_ps(float(r.org[r.shear.kx])), oy = _mm256_set1_ps(float(r.org[r.shear.ky]));
+            const __m256 oz = _mm256_set1_ps(float(r.org[r.shear.kz]));
+            const __m256 Sx = _mm256_set1_ps(float(r.shear.Sx)), Sy = _mm256_set1_ps(float(r.shear.Sy));
+            for (int v = 0; v < 3; ++v) {
+                z[v] = _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kz]), oz);
+                x[v] = _mm256_fnmadd_ps(Sx, z[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+                y[v] = _mm256_fnmadd_ps(Sy, z[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.ky]), oy));
+            }
+        }
+    };
+
+    // Eight float lanes as two halves of four doubles.
+    struct Halves {
+        __m256d lo, hi;
+        explicit Halves(__m256 v) noexcept
+            : lo(_mm256_cvtps_pd(_mm256_castps256_ps128(v))), hi(_mm256_cvtps_pd(_mm256_extractf128_ps(v, 1))) {}
+    };
+
+    // a·b − c·d on 8 float lanes exactly as difference_of_products<float> computes it: products of
+    // floats are exact in double, their difference is rounded once to double, then to float. No
+    // float product is formed, so nothing overflows or underflows on the way: the sign is exact
+    // for all finite lanes and each lane equals the scalar function's result.
+    static __m256 difference_of_products8(const Halves& a, const Halves& b, const Halves& c, const Halves& d) noexcept {
+        const __m128 lo = _mm256_cvtpd_ps(_mm256_fmsub_pd(a.lo, b.lo, _mm256_mul_pd(c.lo, d.lo)));
+        const __m128 hi = _mm256_cvtpd_ps(_mm256_fmsub_pd(a.hi, b.hi, _mm256_mul_pd(c.hi, d.hi)));
+        return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
     }
 
-    // The watertight test on 8 float lanes with AVX2 and FMA (WBW §3). U, V, W have exact signs
-    // (difference_of_products8), so the test stays watertight; padding lanes have det = 0.
-    static bool hit_block_avx2(const Block& b, const RayData& r, BvhHit<T>& best) noexcept {
-        const __m256 ox = _mm256_set1_ps(float(r.org[r.shear.kx])), oy = _mm256_set1_ps(float(r.org[r.shear.ky]));
-        const __m256 oz = _mm256_set1_ps(float(r.org[r.shear.kz]));
-        const __m256 Sx = _mm256_set1_ps(float(r.shear.Sx)), Sy = _mm256_set1_ps(float(r.shear.Sy));
-        __m256 x[3], y[3], pz[3];
-        for (int v = 0; v < 3; ++v) {
-            pz[v] = _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kz]), oz);
-            x[v] = _mm256_fnmadd_ps(Sx, pz[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
-            y[v] = _mm256_fnmadd_ps(Sy, pz[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.ky]), oy));
-        }
-        const __m256 U = difference_of_products8(x[2], y[1], y[2], x[1]);  // WBW: U = Cx·By − Cy·Bx
-        const __m256 V = difference_of_products8(x[0], y[2], y[0], x[2]);  // WBW: V = Ax·Cy − Ay·Cx
-        const __m256 W = difference_of_products8(x[1], y[0], y[1], x[0]);  // WBW: W = Bx·Ay − By·Ax
+    // The watertight test on 8 float lanes with AVX2 and FMA (WBW §3), step for step as
+    // detail::intersect_sheared: U, V, W as difference_of_products<float>, then det, t and the
+    // barycentrics in float, so that each lane decides as intersect_watertight does (up to the
+    // compiler's contraction of the scalar code). hit_block_avx2 is the same test with a faster
+    // U, V, W; it comes here for the blocks where that could err.
+    ISIN_DETAIL_COLD static bool hit_block_exact(const Block& b, const RayData& r, BvhHit<T>& best) noexcept {
+        const Sheared8 p(b, r);
+        const Halves X0(p.x[0]), Y0(p.y[0]), X1(p.x[1]), Y1(p.y[1]), X2(p.x[2]), Y2(p.y[2]);
+        const __m256 U = difference_of_products8(X2, Y1, Y2, X1); // WBW: U = Cx·By − Cy·Bx
+        const __m256 V = difference_of_products8(X0, Y2, Y0, X2); // WBW: V = Ax·Cy − Ay·Cx
+        const __m256 W = difference_of_products8(X1, Y0, Y1, X0); // WBW: W = Bx·Ay − By·Ax
         const __m256 zero = _mm256_setzero_ps();
         // Inside: U, V, W all ≥ 0 or all ≤ 0. A NaN passes here and fails det ≠ 0 (ordered) below.
         const __m256 lowest = _mm256_min_ps(_mm256_min_ps(U, V), W), highest = _mm256_max_ps(_mm256_max_ps(U, V), W);
         const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
         __m256 ok = _mm256_and_ps(_mm256_or_ps(_mm256_cmp_ps(lowest, zero, _CMP_GE_OQ), _mm256_cmp_ps(highest, zero, _CMP_LE_OQ)),
                                   _mm256_cmp_ps(det, zero, _CMP_NEQ_OQ));
+        if (_mm256_testz_ps(ok, ok)) return false;
+        return nearest_lane(b, U, V, W, det, p.z, r, ok, best);
+    }
+#endif
+
+#if defined(__AVX2__) && defined(__FMA__)
+    // a·b − c·d on 8 float lanes by Kahan's algorithm with FMA: the sign is exact unless a
+    // product overflows or underflows float (then the result is not finite, or tiny).
+    static __m256 kahan_difference_of_products8(__m256 a, __m256 b, __m256 c, __m256 d) noexcept {
+        const __m256 cd = _mm256_mul_ps(c, d);
+        const __m256 error = _mm256_fmsub_ps(c, d, cd);  // c·d − cd, exact
+        return _mm256_sub_ps(_mm256_fmsub_ps(a, b, cd), error);
+    }
+
+    // The watertight test on 8 float lanes with AVX2 and FMA, as hit_block_exact but with U, V, W
+    // by Kahan's algorithm in float, four operations each instead of products in double. Its sign
+    // is exact, so each lane decides as the exact test does, unless a product over- or
+    // underflowed float: then det is not finite or an edge function is below 2^-100 in magnitude
+    // (exact zeros included), and the block is handed to hit_block_exact (D7: a vertex at 2e38).
+    static bool hit_block_avx2(const Block& b, const RayData& r, BvhHit<T>& best) noexcept {
+        const Sheared8 p(b, r);
+        const __m256 U = kahan_difference_of_products8(p.x[2], p.y[1], p.y[2], p.x[1]); // WBW: U = Cx·By − Cy·Bx
+        const __m256 V = kahan_difference_of_products8(p.x[0], p.y[2], p.y[0], p.x[2]); // WBW: V = Ax·Cy − Ay·Cx
+        const __m256 W = kahan_difference_of_products8(p.x[1], p.y[0], p.y[1], p.x[0]); // WBW: W = Bx·Ay − By·Ax
+        const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
+        const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+        const __m256 smallest = _mm256_min_ps(_mm256_min_ps(_mm256_and_ps(U, magnitude), _mm256_and_ps(V, magnitude)),
+                                              _mm256_and_ps(W, magnitude));
+        const __m256 trusted = _mm256_and_ps(_mm256_cmp_ps(smallest, _mm256_set1_ps(0x1p-126f), _CMP_GE_OQ),
+                                             _mm256_cmp_ps(_mm256_and_ps(det, magnitude), _mm256_set1_ps(0x1p126f), _CMP_LT_OQ));
+        if (!_mm256_testc_ps(trusted, _mm256_castsi256_ps(_mm256_set1_epi32(-1)))) return hit_block_exact(b, r, best);
+        const __m256 zero = _mm256_setzero_ps();
+        // Inside: U, V, W all ≥ 0 or all ≤ 0.
+        const __m256 lowest = _mm256_min_ps(_mm256_min_ps(U, V), W), highest = _mm256_max_ps(_mm256_max_ps(U, V), W);
+        __m256 ok = _mm256_and_ps(_mm256_or_ps(_mm256_cmp_ps(lowest, zero, _CMP_GE_OQ), _mm256_cmp_ps(highest, zero, _CMP_LE_OQ)),
+                                  _mm256_cmp_ps(det, zero, _CMP_NEQ_OQ));
         if (_mm256_testz_ps(ok, ok)) return false; // most blocks end here, before the division
+        return nearest_lane(b, U, V, W, det, p.z, r, ok, best);
+    }
+
+    // The hits among the lanes of `ok` (inside, det ≠ 0): t = (U·Az + V·Bz + W·Cz)/det with
+    // Az = Sz·A[kz] (WBW, as detail::intersect_sheared computes it), kept when 0 < t < best.t; the
+    // nearest goes into `best`, ties to the lowest lane.
+    static bool nearest_lane(const Block& b, __m256 U, __m256 V, __m256 W, __m256 det, const __m256 (&pz)[3],
+                             const RayData& r, __m256 ok, BvhHit<T>& best) noexcept {
+        const __m256 zero = _mm256_setzero_ps();
         const __m256 Sz = _mm256_set1_ps(float(r.shear.Sz));
-        const __m256 t_scaled = _mm256_mul_ps(Sz, _mm256_fmadd_ps(W, pz[2], _mm256_fmadd_ps(V, pz[1], _mm256_mul_ps(U, pz[0]))));
-        const __m256 t = _mm256_div_ps(t_scaled, det);
+        const __m256 t_scaled = _mm256_fmadd_ps(W, _mm256_mul_ps(Sz, pz[2]),
+                                                _mm256_fmadd_ps(V, _mm256_mul_ps(Sz, pz[1]),
+                                                                _mm256_mul_ps(U, _mm256_mul_ps(Sz, pz[0])))); // WBW: t·det
+        const __m256 inv_det = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
+        const __m256 t = _mm256_mul_ps(t_scaled, inv_det);
         ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(t, zero, _CMP_GT_OQ), _mm256_cmp_ps(t, _mm256_set1_ps(float(best.t)), _CMP_LT_OQ)));
         if (_mm256_testz_ps(ok, ok)) return false;
         // Horizontal minimum of the hits, then its lane.
@@ -668,18 +797,18 @@ private:
         m = _mm256_min_ps(m, _mm256_permute2f128_ps(m, m, 0x01));
         const unsigned lanes = unsigned(_mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(cand, m, _CMP_EQ_OQ), ok)));
         const int k = lowest_bit(lanes);
-        alignas(32) float tv[8], uv[8], vv[8], dv[8];
-        _mm256_store_ps(tv, t), _mm256_store_ps(uv, V), _mm256_store_ps(vv, W), _mm256_store_ps(dv, det);
+        alignas(32) float tv[8], uv[8], vv[8], iv[8];
+        _mm256_store_ps(tv, t), _mm256_store_ps(uv, V), _mm256_store_ps(vv, W), _mm256_store_ps(iv, inv_det);
         best.t = tv[k];
-        best.u = uv[k] / dv[k];
-        best.v = vv[k] / dv[k];
+        best.u = uv[k] * iv[k];
+        best.v = vv[k] * iv[k];
         best.primitive = b.primitive[k];
         return true;
     }
 #endif
 
 #if defined(__AVX2__) && defined(__FMA__)
-    // a·b − c·d on 4 double lanes, sign exact (as difference_of_products8).
+    // a·b − c·d on 4 double lanes as difference_of_products<double> (Kahan's algorithm, FMA).
     static __m256d difference_of_products4(__m256d a, __m256d b, __m256d c, __m256d d) noexcept {
         const __m256d cd = _mm256_mul_pd(c, d);
         const __m256d error = _mm256_fmsub_pd(c, d, cd); // c·d − cd, exact
@@ -694,7 +823,7 @@ private:
         const __m256d Sx = _mm256_set1_pd(double(r.shear.Sx)), Sy = _mm256_set1_pd(double(r.shear.Sy));
         const __m256d zero = _mm256_setzero_pd();
         bool found = false;
-        for (int half = 0; half < 8 && b.primitive[half] != empty_child; half += 4) {
+        for (int half = 0; half < 8 && !padding(b, half); half += 4) {
             __m256d x[3], y[3], pz[3];
             for (int v = 0; v < 3; ++v) {
                 const double* lanes[3] = {b.v[v][r.shear.kx] + half, b.v[v][r.shear.ky] + half, b.v[v][r.shear.kz] + half};
@@ -710,18 +839,21 @@ private:
             __m256d ok = _mm256_and_pd(_mm256_or_pd(_mm256_cmp_pd(lowest, zero, _CMP_GE_OQ), _mm256_cmp_pd(highest, zero, _CMP_LE_OQ)),
                                        _mm256_cmp_pd(det, zero, _CMP_NEQ_OQ));
             if (_mm256_testz_pd(ok, ok)) continue;
-            const __m256d t_scaled = _mm256_mul_pd(_mm256_set1_pd(double(r.shear.Sz)),
-                                                   _mm256_fmadd_pd(W, pz[2], _mm256_fmadd_pd(V, pz[1], _mm256_mul_pd(U, pz[0]))));
-            const __m256d t = _mm256_div_pd(t_scaled, det);
+            const __m256d Sz = _mm256_set1_pd(double(r.shear.Sz));
+            const __m256d t_scaled = _mm256_fmadd_pd(W, _mm256_mul_pd(Sz, pz[2]),
+                                                     _mm256_fmadd_pd(V, _mm256_mul_pd(Sz, pz[1]),
+                                                                     _mm256_mul_pd(U, _mm256_mul_pd(Sz, pz[0])))); // WBW: t·det
+            const __m256d inv_det = _mm256_div_pd(_mm256_set1_pd(1.0), det);
+            const __m256d t = _mm256_mul_pd(t_scaled, inv_det);
             ok = _mm256_and_pd(ok, _mm256_and_pd(_mm256_cmp_pd(t, zero, _CMP_GT_OQ), _mm256_cmp_pd(t, _mm256_set1_pd(double(best.t)), _CMP_LT_OQ)));
             const unsigned lanes = unsigned(_mm256_movemask_pd(ok));
             if (!lanes) continue;
-            alignas(32) double tv[4], uv[4], vv[4], dv[4];
-            _mm256_store_pd(tv, t), _mm256_store_pd(uv, V), _mm256_store_pd(vv, W), _mm256_store_pd(dv, det);
+            alignas(32) double tv[4], uv[4], vv[4], iv[4];
+            _mm256_store_pd(tv, t), _mm256_store_pd(uv, V), _mm256_store_pd(vv, W), _mm256_store_pd(iv, inv_det);
             int k = -1;
             for (int l = 0; l < 4; ++l)
                 if (((lanes >> l) & 1u) && (k < 0 || tv[l] < tv[k])) k = l;
-            best.t = T(tv[k]), best.u = T(uv[k] / dv[k]), best.v = T(vv[k] / dv[k]);
+            best.t = T(tv[k]), best.u = T(uv[k] * iv[k]), best.v = T(vv[k] * iv[k]);
             best.primitive = b.primitive[half + k];
             found = true;
         }
@@ -730,9 +862,9 @@ private:
 #endif
 
 #if ISIN_VECTOR_EXTENSIONS
-    // The same test on 8 float lanes at once (WBW §3). The edge functions U, V, W are products of
-    // floats formed in double, where they are exact: their signs are right whatever the
-    // compiler contracts, so the test stays watertight; det and t follow in double.
+    // The same test on 8 float lanes with the compiler's vector extensions, step for step as
+    // detail::intersect_sheared: U, V, W as difference_of_products<float> (exact products in
+    // double, rounded to float), then det, t and the barycentrics in float.
     static bool hit_block_lanes(const Block& b, const RayData& r, BvhHit<T>& best) noexcept {
         using V = detail::L8<float>;
         using D = detail::L8<double>;
@@ -745,31 +877,28 @@ private:
             px -= float(r.org[r.shear.kx]), py -= float(r.org[r.shear.ky]), pz -= float(r.org[r.shear.kz]);
             x[v] = px - float(r.shear.Sx) * pz;           // WBW: Ax = A[kx] − Sx·A[kz]
             y[v] = py - float(r.shear.Sy) * pz;
-            z[v] = float(r.shear.Sz) * pz;
+            z[v] = float(r.shear.Sz) * pz;                // WBW: Az = Sz·A[kz]
         }
         const D X0 = __builtin_convertvector(x[0], D), Y0 = __builtin_convertvector(y[0], D);
         const D X1 = __builtin_convertvector(x[1], D), Y1 = __builtin_convertvector(y[1], D);
         const D X2 = __builtin_convertvector(x[2], D), Y2 = __builtin_convertvector(y[2], D);
-        const D U = X2 * Y1 - Y2 * X1;             // WBW: U = Cx·By − Cy·Bx (exact products)
-        const D Vv = X0 * Y2 - Y0 * X2;            // WBW: V = Ax·Cy − Ay·Cx
-        const D W = X1 * Y0 - Y1 * X0;             // WBW: W = Bx·Ay − By·Ax
-        const D det = U + Vv + W;
-        const D t_scaled = U * __builtin_convertvector(z[0], D) + Vv * __builtin_convertvector(z[1], D) +
-                           W * __builtin_convertvector(z[2], D);
-        const D t = t_scaled / det;                // lanes with det = 0 give ±∞ or NaN: rejected below
-        const auto inside = ((U >= 0.0) & (Vv >= 0.0) & (W >= 0.0)) | ((U <= 0.0) & (Vv <= 0.0) & (W <= 0.0));
-        const auto ok = inside & (det != 0.0) & (t > 0.0) & (t < double(best.t)); // padding: det = 0
-        const D candidates = ok ? t : D{} + std::numeric_limits<double>::infinity();
-        double t_win = candidates[0];
+        const V U = __builtin_convertvector(X2 * Y1 - Y2 * X1, V);  // WBW: U = Cx·By − Cy·Bx (exact products)
+        const V Vv = __builtin_convertvector(X0 * Y2 - Y0 * X2, V); // WBW: V = Ax·Cy − Ay·Cx
+        const V W = __builtin_convertvector(X1 * Y0 - Y1 * X0, V);  // WBW: W = Bx·Ay − By·Ax
+        const V det = U + Vv + W;
+        const V inv_det = 1.0f / det;              // lanes with det = 0 give ±∞ or NaN: rejected below
+        const V t = (U * z[0] + Vv * z[1] + W * z[2]) * inv_det; // WBW: t = (U·Az + V·Bz + W·Cz)/det
+        const auto inside = ((U >= 0.0f) & (Vv >= 0.0f) & (W >= 0.0f)) | ((U <= 0.0f) & (Vv <= 0.0f) & (W <= 0.0f));
+        const auto ok = inside & (det != 0.0f) & (t > 0.0f) & (t < float(best.t));
+        const V candidates = ok ? t : V{} + std::numeric_limits<float>::infinity();
+        float t_win = candidates[0];
         for (int k = 1; k < 8; ++k) t_win = candidates[k] < t_win ? candidates[k] : t_win; // horizontal min
-        if (!(t_win < double(best.t))) return false;
+        if (!(t_win < best.t)) return false;
         int winner = 0;
         while (candidates[winner] != t_win) ++winner;
-        const float t_hit = float(t_win);
-        if (!(t_hit < best.t)) return false; // rounding to float reached best.t
-        best.t = t_hit;
-        best.u = float(Vv[winner] / det[winner]);
-        best.v = float(W[winner] / det[winner]);
+        best.t = t_win;
+        best.u = Vv[winner] * inv_det[winner];
+        best.v = W[winner] * inv_det[winner];
         best.primitive = b.primitive[winner];
         return true;
     }
@@ -780,12 +909,17 @@ private:
         if (nodes_.empty()) return false;
         RayData r = prepare(ray);
         if (!r.ok || !(best.t > T(0))) return false;
+        return r.robust ? walk<any_hit, true>(r, best) : walk<any_hit, false>(r, best);
+    }
+
+    template <bool any_hit, bool robust>
+    bool walk(RayData& r, BvhHit<T>& best) const noexcept {
         bool sheared = false;
         struct Entry {
             std::uint32_t ref;
             T t;
         };
-        Entry stack[8 * 64]; // the build bounds the depth by ~40 + log2(n): 7 entries a level
+        Entry stack[7 * (sah_depth + 32) + 1]; // 7 entries a level at most
         int top = 0;
         std::uint32_t ref = 0; // the node or leaf being visited
         bool hit = false;
@@ -801,7 +935,7 @@ private:
             } else {
                 const Node& n = nodes_[ref];
                 T t_near[8];
-                unsigned mask = hit_children(n, r, best.t, t_near);
+                unsigned mask = hit_children<robust>(n, r, best.t, t_near);
                 if (mask) {
                     int k = lowest_bit(mask);
                     mask &= mask - 1;
@@ -863,6 +997,7 @@ private:
     std::vector<Node> nodes_;
     std::vector<Block, detail::UninitAllocator<Block>> blocks_; // filled in parallel after the collapse
     std::size_t primitives_ = 0;
+    T bound_ = T(0); // largest |coordinate| of any box: whether a ray's slab products can overflow
     int leaf_size_ = 8;
     const std::vector<Triangle<T>>* triangles_ = nullptr; // during the build only
     struct Range {
