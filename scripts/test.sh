@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Quick start, command 2: installs what is missing, then builds and runs the whole test suite
-# three times — g++ and clang++ with warnings as errors, and clang++ with AddressSanitizer and
-# UndefinedBehaviorSanitizer — then the stability and BVH tests once more with g++ and clang++ at -O0 and
-# at -O3 -march=native (their guarantees must survive any FMA contraction), and ends with
-# ctest's summary (set -e stops at the first configuration that fails).
+# Quick start, command 2: installs what is missing, then runs the stability and BVH tests with
+# g++ and clang++ at -O0 and at -O3 -march=native (their guarantees must survive any FMA
+# contraction), the whole test suite four times — g++ and clang++ with warnings as errors,
+# clang++ with AddressSanitizer and UndefinedBehaviorSanitizer, clang++ with ThreadSanitizer —
+# and fuzzes the file readers (scripts/fuzz.sh, ISIN_FUZZ_SECONDS per target, default 45;
+# 0 skips it). set -e stops at the first configuration that fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/deps.sh
@@ -18,9 +19,13 @@ for cxx in g++ clang++; do
     ctest --test-dir "$dir" -R '^(test_stability|test_bvh)$' --output-on-failure
   done
 done
-for preset in gcc clang sanitize; do
+for preset in gcc clang sanitize tsan; do
   echo "== isin: $preset" >&2
   cmake --preset "$preset" >/dev/null
   cmake --build --preset "$preset" -j"$jobs"
   ctest --preset "$preset" -j"$jobs"
 done
+fuzz_seconds=${ISIN_FUZZ_SECONDS:-45}
+if [ "$fuzz_seconds" != 0 ]; then
+  bash scripts/fuzz.sh "$fuzz_seconds"
+fi

@@ -1,0 +1,18 @@
+// libFuzzer target: the PLY reader (isin::load_mesh_from_memory, MeshFormat::ply) in float and
+// double. isin::MeshError is the defined answer to bad data; anything else is a finding.
+#include <isin/mesh.hpp>
+
+#include <cstddef>
+#include <cstdint>
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    try {
+        (void)isin::load_mesh_from_memory<float>(data, size, isin::MeshFormat::ply);
+    } catch (const isin::MeshError&) {
+    }
+    try {
+        (void)isin::load_mesh_from_memory<double>(data, size, isin::MeshFormat::ply);
+    } catch (const isin::MeshError&) {
+    }
+    return 0;
+}
