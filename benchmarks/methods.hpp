@@ -54,7 +54,7 @@ template <class T> struct MollerTrumboreBatch {
     static constexpr const char* name = "moller-trumbore-batch";
     using Data = isin::TriangleBatch<T>;
     static Data prepare(const isin::Triangle<T>& t) { return Data(std::vector<isin::Triangle<T>>{t}); }
-    static isin::Hit<T> test(const isin::Ray<T>& r, const Data& d) { return d.nearest(r).hit; }
+    static isin::Hit<T> test(const isin::Ray<T>& r, const Data& d) { return d.nearest(r); }
     static constexpr bool culls = false;
 };
 

@@ -155,7 +155,7 @@ int main(int argc, char** argv) {
         Row row{c.series, n, {not_measured, not_measured, not_measured, not_measured}};
         const isin::Bvh<float> bvh{c.tris};
         const auto bvh_nearest = [&](const isin::Ray<float>& ray, float& t) {
-            const isin::BvhHit<float> h = bvh.intersect(ray);
+            const isin::Hit<float> h = bvh.intersect(ray);
             t = h.t;
             return bool(h);
         };
@@ -183,8 +183,8 @@ int main(int argc, char** argv) {
             compare("watertight", tot, ref);
             const isin::TriangleBatch<float> batch{c.tris};
             row.m[1] = mrays(camera, stride, repeats, [&](const isin::Ray<float>& ray, float& t) {
-                const isin::BatchHit<float> h = batch.nearest(ray);
-                t = h.hit.t;
+                const isin::Hit<float> h = batch.nearest(ray);
+                t = h.t;
                 return bool(h);
             }, tot);
             compare("batch", tot, ref);

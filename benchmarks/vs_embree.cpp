@@ -159,7 +159,7 @@ struct Bench {
             for (int y = 4 * band; y < std::min(4 * band + 4, opt.height); ++y)
                 for (int x = 0; x < opt.width; ++x) {
                     const isin::Ray<float> ray = camera.primary_ray(float(x), float(y));
-                    const isin::BvhHit<float> hit = bvh.intersect(ray);
+                    const isin::Hit<float> hit = bvh.intersect(ray);
                     if (!hit) continue;
                     isin::Vertex<float> n = isin::normalize(isin::normal(tris[hit.primitive]));
                     if (isin::dot(n, ray.direction) > 0.0f) n = -n; // the side the eye sees
@@ -178,7 +178,7 @@ struct Bench {
             Totals acc;
             for (int y = 4 * band; y < std::min(4 * band + 4, opt.height); ++y)
                 for (int x = 0; x < opt.width; ++x) {
-                    const isin::BvhHit<float> hit = bvh.intersect(camera.primary_ray(float(x), float(y)));
+                    const isin::Hit<float> hit = bvh.intersect(camera.primary_ray(float(x), float(y)));
                     if (hit) ++acc.hits, acc.sum_t += double(hit.t);
                 }
             out = acc;

@@ -37,8 +37,8 @@ TEST_CASE_TEMPLATE("§10 TriangleBatch: same nearest hit, u, v as scalar Möller
             CHECK(bool(got) == bool(ref));
             if (!ref || !got) continue;
             ++hits;
-            agree += got.index == best && double(got.hit.t) == approx(ref.t).epsilon(1e-5) &&
-                     double(got.hit.u) == approx(ref.u).epsilon(1e-4) && double(got.hit.v) == approx(ref.v).epsilon(1e-4);
+            agree += got.primitive == best && double(got.t) == approx(ref.t).epsilon(1e-5) &&
+                     double(got.u) == approx(ref.u).epsilon(1e-4) && double(got.v) == approx(ref.v).epsilon(1e-4);
         }
         CAPTURE(n);
         CHECK(agree == hits);
@@ -51,8 +51,8 @@ TEST_CASE_TEMPLATE("TriangleBatch: t_max, each_hit, bad rays", T, float, double)
                                               {{-1, -1, 20}, {1, -1, 20}, {0, 1, 20}}};
     const isin::TriangleBatch<T> batch(tris);
     const isin::Ray<T> ray{{0, 0, 0}, {0, 0, 1}};
-    CHECK(batch.nearest(ray).index == 0);
-    CHECK(batch.nearest(ray).hit.t == approx(10));
+    CHECK(batch.nearest(ray).primitive == 0);
+    CHECK(batch.nearest(ray).t == approx(10));
     CHECK_FALSE(batch.nearest(ray, T(5)));
     std::vector<std::size_t> seen;
     batch.each_hit(ray, T(100), [&](std::size_t i, T) { seen.push_back(i); return true; });
@@ -76,16 +76,18 @@ TEST_CASE_TEMPLATE("scene: batch and one-by-one triangle loops find the same hit
         scene.add(isin::Triangle<T>{c, c + isin::Vertex<T>{T(uni(rng)), T(uni(rng)), 0},
                                     c + isin::Vertex<T>{T(uni(rng)), T(uni(rng)), T(uni(rng))}}, m);
     }
+    scene.commit(); // 40 ≥ batch_min: the batch
+    REQUIRE_FALSE(scene.template has_bvh<isin::Triangle<T>>());
     int differ = 0;
     for (int r = 0; r < 1000; ++r) {
         const isin::Ray<T> ray{{0, 0, 0}, isin::normalize(isin::Vertex<T>{T(uni(rng) * 8), T(uni(rng) * 4.5), 10})};
-        scene.batch_min = 1;
+        scene.acceleration = isin::Acceleration::automatic;
         const auto a = scene.intersect(ray);
         const T ta = scene.transmittance(ray, T(100));
-        scene.batch_min = 1000;
+        scene.acceleration = isin::Acceleration::none;
         const auto b = scene.intersect(ray);
         const T tb = scene.transmittance(ray, T(100));
-        differ += bool(a) != bool(b) || (a && a.index != b.index) || ta != tb;
+        differ += bool(a) != bool(b) || (a && a.primitive != b.primitive) || ta != tb;
     }
     CHECK(differ == 0);
 }

@@ -63,15 +63,15 @@ void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); 
 namespace {
 
 template <class T>
-isin::BvhHit<T> brute_force(const std::vector<isin::Triangle<T>>& tris, const isin::Ray<T>& ray,
+isin::Hit<T> brute_force(const std::vector<isin::Triangle<T>>& tris, const isin::Ray<T>& ray,
                             T t_max = std::numeric_limits<T>::infinity()) {
-    isin::BvhHit<T> best;
+    isin::Hit<T> best;
     best.t = t_max;
     for (std::size_t i = 0; i < tris.size(); ++i) {
         const auto h = isin::intersect_watertight(ray, tris[i]);
         if (h.t < best.t) best = {h.t, h.u, h.v, std::uint32_t(i)};
     }
-    return best.t < t_max ? best : isin::BvhHit<T>{};
+    return best.t < t_max ? best : isin::Hit<T>{};
 }
 
 template <class T>
@@ -217,15 +217,15 @@ TEST_CASE("BVH: one-thread and multi-thread builds give the same answers") {
 TEST_CASE_TEMPLATE("BVH build: a box grown by an empty box (an empty bin) is unchanged", T, float, double) {
     // Regression: growing by the corners of an empty box (lo = +inf, hi = -inf) made the box
     // infinite, so every SAH cost after an empty bin was infinite and good splits were skipped.
-    isin::detail::Box<T> box;
+    isin::Box<T> box;
     box.grow(isin::Vertex<T>{1, 2, 3});
     box.grow(isin::Vertex<T>{4, 5, 6});
     const T area = box.area();
-    box.grow(isin::detail::Box<T>{});
+    box.grow(isin::Box<T>{});
     CHECK(box.lo.x == T(1));
     CHECK(box.hi.z == T(6));
     CHECK(box.area() == area);
-    isin::detail::Box<T> empty;
+    isin::Box<T> empty;
     empty.grow(box);
     CHECK(empty.area() == area);
 }
@@ -450,3 +450,175 @@ TEST_CASE("BVH build: std::bad_alloc in a build worker reaches the constructor, 
     CHECK(after.size() == tris.size());
 }
 #endif
+
+// ---- leaves chosen by the caller: culling, all hits, refit, any primitive -------------------------
+
+#include <isin/culling.hpp>
+#include <isin/indexed_mesh.hpp>
+#include <isin/sphere.hpp>
+
+#include <algorithm>
+#include <set>
+
+TEST_CASE_TEMPLATE("BVH culling flag: the leaf test keeps exactly the faces §11 method 1 keeps (eye at the origin)", T,
+                   float, double) {
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    int kept = 0, culled = 0, disagree = 0;
+    for (int k = 0; k < 2000; ++k) {
+        const isin::Vertex<T> eye{T(uni(rng) * 5), T(uni(rng) * 5), T(uni(rng) * 5)};
+        const auto p = [&] { return isin::Vertex<T>{T(uni(rng) * 10), T(uni(rng) * 10), T(20 + uni(rng) * 10)}; };
+        const std::vector<isin::Triangle<T>> tri{{p(), p(), p()}};
+        const isin::Bvh<T> bvh{tri};
+        // through an inner point of the triangle (u, v in [0.1, 0.45]: away from its edges)
+        const double u = 0.275 + 0.175 * uni(rng), v = 0.275 + 0.175 * uni(rng);
+        const auto at = [&](T a, T b, T c) { return T(double(a) + u * (double(b) - double(a)) + v * (double(c) - double(a))); };
+        const isin::Vertex<T> target{at(tri[0].v0.x, tri[0].v1.x, tri[0].v2.x), at(tri[0].v0.y, tri[0].v1.y, tri[0].v2.y),
+                                     at(tri[0].v0.z, tri[0].v1.z, tri[0].v2.z)};
+        const isin::Ray<T> ray{eye, target - eye};
+        isin::HitFilter cull;
+        cull.cull_backfaces = true;
+        REQUIRE(bvh.intersect(ray)); // two-sided: always hit
+        const bool front = bool(bvh.intersect(ray, std::numeric_limits<T>::infinity(), cull));
+        const bool back = isin::is_backface(tri[0], eye); // §11 method 1, the tested definition
+        disagree += front == back;
+        (front ? kept : culled) += 1;
+        CHECK(bvh.occluded(ray, T(1e9), cull) == front);
+    }
+    CHECK(disagree == 0);
+    CHECK(kept > 500);
+    CHECK(culled > 500);
+}
+
+TEST_CASE_TEMPLATE("BVH culling: 20 culled layers in front of a visible face, and a skip mask", T, float, double) {
+    // The old scene path restarted the ray after each culled hit, at most 16 times: 20 layers hid
+    // the face behind. Now culling is a filter of the leaf test, with no restarts.
+    std::vector<isin::Triangle<T>> tris;
+    for (int layer = 0; layer < 20; ++layer) { // back faces seen from the origin: anticlockwise
+        const T z = T(10 + layer);
+        tris.push_back({{-1, -1, z}, {1, -1, z}, {0, 1, z}});
+    }
+    tris.push_back({{-1, -1, 40}, {0, 1, 40}, {1, -1, 40}}); // clockwise: the front face, index 20
+    REQUIRE(isin::is_backface(tris[0], isin::Vertex<T>{0, 0, 0}));
+    REQUIRE_FALSE(isin::is_backface(tris[20], isin::Vertex<T>{0, 0, 0}));
+    const isin::Bvh<T> bvh{tris, isin::BvhOptions{1, 1}}; // leaves of one triangle: 21 leaves on the way
+    const isin::Ray<T> ray{{0, 0, 0}, {0, 0, 1}};
+    CHECK(bvh.intersect(ray).primitive == 0);
+    isin::HitFilter cull;
+    cull.cull_backfaces = true;
+    const auto h = bvh.intersect(ray, std::numeric_limits<T>::infinity(), cull);
+    REQUIRE(h);
+    CHECK(h.primitive == 20);
+    CHECK(h.t == approx(40));
+    std::vector<std::uint8_t> skip(tris.size(), 1);
+    skip[7] = 0;
+    isin::HitFilter only7;
+    only7.skip = skip.data();
+    CHECK(bvh.intersect(ray, std::numeric_limits<T>::infinity(), only7).primitive == 7);
+}
+
+TEST_CASE_TEMPLATE("BVH for_each_hit: every triangle hit in (0, t_max) once, as brute force finds them", T, float, double) {
+    const auto tris = random_soup<T>(3000, 21);
+    const isin::Bvh<T> bvh{tris};
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    int rays_with_many = 0;
+    for (int r = 0; r < 300; ++r) {
+        const isin::Ray<T> ray{{T(uni(rng) * 10), T(uni(rng) * 10), T(-20)},
+                               isin::normalize(isin::Vertex<T>{T(uni(rng) * 0.3), T(uni(rng) * 0.3), 1})};
+        const T t_max = T(30);
+        std::multiset<std::uint32_t> want, got;
+        for (std::size_t i = 0; i < tris.size(); ++i)
+            if (isin::intersect_watertight(ray, tris[i]).t < t_max) want.insert(std::uint32_t(i));
+        bvh.for_each_hit(ray, t_max, [&](std::uint32_t i, const isin::Hit<T>& h) {
+            got.insert(i);
+            CHECK(h.t < t_max);
+            return true;
+        });
+        CHECK(got == want);
+        rays_with_many += want.size() > 2;
+    }
+    CHECK(rays_with_many > 20);
+}
+
+TEST_CASE_TEMPLATE("BVH refit: after the vertices move, hits equal a rebuild's", T, float, double) {
+    isin::Mesh<T> mesh = isin::Mesh<T>::from_triangles(random_soup<T>(5000, 8));
+    isin::Bvh<T> bvh{mesh};
+    // an animation step: everything swirls and stretches
+    for (auto& p : mesh.positions)
+        p = isin::Vertex<T>{p.x * T(1.3) + T(0.2) * p.z, p.y - T(0.1) * p.x, p.z * T(0.8) + T(2)};
+    bvh.refit(mesh);
+    const isin::Bvh<T> rebuilt{mesh};
+    std::mt19937_64 rng(9);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    int hits = 0, differ = 0;
+    for (int r = 0; r < 2000; ++r) {
+        const isin::Ray<T> ray{{T(uni(rng) * 15), T(uni(rng) * 15), T(-20)},
+                               isin::normalize(isin::Vertex<T>{T(uni(rng) * 0.4), T(uni(rng) * 0.4), 1})};
+        const auto a = bvh.intersect(ray), b = rebuilt.intersect(ray);
+        hits += bool(b);
+        differ += bool(a) != bool(b) || (a && a.t != b.t) || bvh.occluded(ray, T(100)) != rebuilt.occluded(ray, T(100));
+    }
+    CHECK(hits > 200);
+    CHECK(differ == 0);
+}
+
+TEST_CASE("Mesh: validate names a bad index or a wrongly sized array; Bvh and the soup constructor agree") {
+    isin::Mesh<float> mesh;
+    mesh.positions = {{0, 0, 5}, {1, 0, 5}, {0, 1, 5}};
+    mesh.indices = {{0, 2, 1}};
+    CHECK_NOTHROW(mesh.validate());
+    mesh.indices.push_back({0, 1, 3});
+    CHECK_THROWS_WITH_AS(mesh.validate(), doctest::Contains("vertex 3 of 3"), std::invalid_argument);
+    CHECK_THROWS_AS(isin::Bvh<float>{mesh}, std::invalid_argument);
+    mesh.indices.pop_back();
+    mesh.normals.resize(2);
+    CHECK_THROWS_WITH_AS(mesh.validate(), doctest::Contains("normals"), std::invalid_argument);
+    mesh.normals.clear();
+    const isin::Bvh<float> a{mesh}, b{std::vector<isin::Triangle<float>>{mesh.triangle(0)}};
+    const isin::Ray<float> ray{{0.2f, 0.2f, 0}, {0, 0, 1}};
+    CHECK(a.intersect(ray).t == b.intersect(ray).t);
+    CHECK(a.intersect(ray).primitive == 0);
+}
+
+TEST_CASE_TEMPLATE("BvhTree with the caller's leaf: spheres found as brute force finds them", T, float, double) {
+    std::mt19937_64 rng(4);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    std::vector<isin::Sphere<T>> spheres;
+    for (int i = 0; i < 2000; ++i)
+        spheres.push_back({{T(uni(rng) * 20), T(uni(rng) * 20), T(30 + uni(rng) * 20)}, T(0.2 + 0.3 * (uni(rng) + 1))});
+    spheres.push_back({{0, 0, 10}, T(-1)}); // empty: left out
+    const auto tree = isin::build_bvh<T>(spheres.size(), [&](std::size_t i) {
+        isin::Box<T> b;
+        const auto& s = spheres[i];
+        if (s.radius > T(0)) b.grow(s.center - isin::Vertex<T>{s.radius, s.radius, s.radius}), b.grow(s.center + isin::Vertex<T>{s.radius, s.radius, s.radius});
+        return b;
+    });
+    CHECK(tree.size() == 2000);
+    int hits = 0, differ = 0;
+    for (int r = 0; r < 1000; ++r) {
+        const isin::Ray<T> ray{{T(uni(rng) * 5), T(uni(rng) * 5), 0},
+                               isin::normalize(isin::Vertex<T>{T(uni(rng) * 0.5), T(uni(rng) * 0.5), 1})};
+        T t = std::numeric_limits<T>::infinity();
+        std::uint32_t found = ~0u;
+        isin::traverse<isin::Visit::nearest>(tree, ray, t, [&](std::uint32_t leaf, T& t_max) {
+            const auto& l = tree.leaves()[leaf];
+            for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
+                const std::uint32_t i = tree.primitives()[j];
+                const auto h = isin::intersect(ray, spheres[i]);
+                if (h.t < t_max) t_max = h.t, found = i;
+            }
+            return false;
+        });
+        T want = std::numeric_limits<T>::infinity();
+        std::uint32_t want_i = ~0u;
+        for (std::size_t i = 0; i < spheres.size(); ++i) {
+            const auto h = isin::intersect(ray, spheres[i]);
+            if (h.t < want) want = h.t, want_i = std::uint32_t(i);
+        }
+        hits += want_i != ~0u;
+        differ += found != want_i || (found != ~0u && t != want);
+    }
+    CHECK(hits > 100);
+    CHECK(differ == 0);
+}

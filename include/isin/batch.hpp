@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -15,14 +16,6 @@
 #include "vec.hpp"
 
 namespace isin {
-
-/// Nearest hit among a batch of triangles, and which one.
-template <class T>
-struct BatchHit {
-    Hit<T> hit;
-    std::size_t index = 0;
-    explicit operator bool() const noexcept { return bool(hit); }
-};
 
 /// Triangles stored as V0, E1 = V1−V0, E2 = V2−V0 in separate arrays, padded to whole blocks.
 /// Zero-area triangles are stored with zero edges, so every ray misses them (as in the scalar test).
@@ -56,18 +49,17 @@ public:
     [[nodiscard]] std::size_t size() const noexcept { return size_; }
     [[nodiscard]] bool empty() const noexcept { return size_ == 0; }
 
-    /// Nearest hit with t in (0, t_max), two-sided; miss if none.
-    [[nodiscard]] BatchHit<T> nearest(const Ray<T>& ray,
-                                      T t_max = std::numeric_limits<T>::infinity()) const noexcept {
-        BatchHit<T> best;
-        best.hit.t = t_max;
+    /// Nearest hit with t in (0, t_max), two-sided; miss if none. `primitive` is the index of
+    /// the triangle in the batch.
+    [[nodiscard]] Hit<T> nearest(const Ray<T>& ray, T t_max = std::numeric_limits<T>::infinity()) const noexcept {
+        Hit<T> best;
+        T t_best = t_max;
         T t[block], u[block], v[block];
         for (std::size_t base = 0; base < size_; base += block) {
-            test_block(ray, base, best.hit.t, t, u, v);
+            test_block(ray, base, t_best, t, u, v);
             for (std::size_t k = 0; k < block; ++k)
-                if (t[k] < best.hit.t) best = {Hit<T>{t[k], u[k], v[k]}, base + k};
+                if (t[k] < t_best) t_best = t[k], best = {t[k], u[k], v[k], static_cast<std::uint32_t>(base + k)};
         }
-        if (!(best.hit.t < t_max)) return BatchHit<T>{};
         return best;
     }
 

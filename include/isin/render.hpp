@@ -58,15 +58,19 @@ struct RenderStats {
     }
 };
 
-/// Per-kind masks of triangles that are backfaces for the camera (§11); spheres are never culled.
+/// What primary rays leave out under `culling` (§11): per kind, the triangles that are backfaces
+/// for the camera by the chosen method (spheres are never culled), and the back faces of placed
+/// meshes, which the Bvh's leaf test skips as §11 method 1 with the eye at the ray's origin
+/// (for triangles in front of the eye, method 2 decides alike).
 template <class T, template <class> class... S>
-[[nodiscard]] std::array<std::vector<std::uint8_t>, sizeof...(S)>
-backface_masks(const Scene<T, S...>& scene, const Camera<T>& cam, Culling culling) {
-    std::array<std::vector<std::uint8_t>, sizeof...(S)> masks;
-    if (culling == Culling::none) return masks;
+[[nodiscard]] typename Scene<T, S...>::Culled backface_masks(const Scene<T, S...>& scene, const Camera<T>& cam,
+                                                             Culling culling) {
+    typename Scene<T, S...>::Culled culled;
+    if (culling == Culling::none) return culled;
+    culled.mesh_backfaces = true;
     scene.for_each_kind([&](auto kind, const auto& objects) {
         if (objects.empty() || !triangle_of(objects.front().shape)) return;
-        auto& mask = masks[kind];
+        auto& mask = culled.objects[kind];
         mask.resize(objects.size());
         for (std::size_t i = 0; i < objects.size(); ++i) {
             const Triangle<T>& tri = *triangle_of(objects[i].shape);
@@ -75,7 +79,7 @@ backface_masks(const Scene<T, S...>& scene, const Camera<T>& cam, Culling cullin
                           : is_backface_projected(to_camera_space(cam, tri), cam.plane_distance); // §11 method 2
         }
     });
-    return masks;
+    return culled;
 }
 
 /// The colour seen along `ray` (unit direction): nearest hit (§5), Phong with shadows (§7, §9),
@@ -83,10 +87,10 @@ backface_masks(const Scene<T, S...>& scene, const Camera<T>& cam, Culling cullin
 template <class T, template <class> class... S>
 [[nodiscard]] Color<T> trace(const Scene<T, S...>& scene, const Ray<T>& ray, int depth,
                              const RenderOptions& opt, RenderStats& stats,
-                             const std::array<std::vector<std::uint8_t>, sizeof...(S)>* skip = nullptr) {
+                             const typename Scene<T, S...>::Culled* skip = nullptr) {
     if (depth > RenderOptions::max_depth_limit) // render() checks opt.max_depth; this bounds direct calls too
         throw std::invalid_argument("isin::trace: depth " + std::to_string(depth) + " is beyond max_depth_limit");
-    const SceneHit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
+    const Hit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
     if (!sh) return scene.background;
     const SurfacePoint<T> sp = scene.surface(ray, sh);
     const Material<T>& m = scene.material(sp.material);

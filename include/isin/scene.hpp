@@ -2,12 +2,22 @@
 /// isin — scenes: the objects, materials and lights a ray tracer needs, and nearest-hit
 /// visibility (note §3, §5) over them. A scene holds only the primitive kinds it names:
 /// `Scene<float, Sphere>` compiles no triangle code, `Scene<double, Sphere, Triangle>` no
-/// texture coordinates. The per-ray loops are plain loops over one vector per kind, no virtual calls.
+/// texture coordinates. Each kind is a plain vector, tested one by one, as a vectorised batch
+/// (triangles) or through a Bvh of its own once it is large; meshes are stored once with their
+/// Bvh and placed any number of times (instances), found through a Bvh over the placements.
+/// No virtual calls.
+///
+///     isin::Scene<float, isin::Sphere> scene;
+///     auto dragon = scene.add_mesh(mesh, scene.add_material(gold)); // builds its Bvh, places it once
+///     scene.add_instance(dragon, isin::Transform<float>::translation({30, 0, 0}));
+///     scene.commit();                                               // the Bvh over the placements
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <memory>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -19,10 +29,12 @@
 #include "bvh.hpp"
 #include "color.hpp"
 #include "hit.hpp"
+#include "indexed_mesh.hpp"
 #include "ray.hpp"
 #include "shading.hpp"
 #include "sphere.hpp"
 #include "texture.hpp"
+#include "transform.hpp"
 #include "triangle.hpp"
 #include "vec.hpp"
 
@@ -47,32 +59,44 @@ struct Object {
     std::uint32_t material;
 };
 
-/// The nearest hit in a scene: t, barycentrics, and which object (kind = position of the
-/// primitive kind in the scene's list, index = position in that kind's vector).
-template <class T>
-struct SceneHit {
-    Hit<T> hit;
-    std::size_t kind = 0;
-    std::size_t index = 0;
-    explicit operator bool() const noexcept { return bool(hit); }
-};
+// ---- per-kind customisation points ---------------------------------------------------------------
+// A kind of primitive needs `intersect_primitive(ray, shape, TriangleMethod)` (a Hit), `bounds(shape)`
+// (a Box, for its Bvh), `surface_normal(shape, point, hit)` (unit) and `triangle_of(shape)` (its
+// plain triangle for culling, or nullptr); texture_coordinates is optional. A user's kind defines
+// them in its own namespace (found by argument-dependent lookup), as tests/test_render.cpp does.
 
-/// Per-primitive customisation: how a ray meets it, its unit normal, its texture coordinates.
 template <class T>
-[[nodiscard]] inline Hit<T> intersect_primitive(const Ray<T>& ray, const Sphere<T>& sp,
-                                                TriangleMethod) noexcept {
+[[nodiscard]] inline Hit<T> intersect_primitive(const Ray<T>& ray, const Sphere<T>& sp, TriangleMethod) noexcept {
     return intersect(ray, sp);
 }
 template <class T>
 [[nodiscard]] inline Hit<T> intersect_primitive(const Ray<T>& ray, const Triangle<T>& tri,
                                                 TriangleMethod method) noexcept {
-    return method == TriangleMethod::area ? intersect_area(ray, tri)
-                                          : intersect_moller_trumbore(ray, tri);
+    return method == TriangleMethod::area ? intersect_area(ray, tri) : intersect_moller_trumbore(ray, tri);
 }
 template <class T>
 [[nodiscard]] inline Hit<T> intersect_primitive(const Ray<T>& ray, const TexturedTriangle<T>& tri,
                                                 TriangleMethod method) noexcept {
     return intersect_primitive(ray, tri.triangle, method);
+}
+
+/// The box of a sphere: empty for an empty sphere (radius zero, negative or not finite).
+template <class T>
+[[nodiscard]] inline Box<T> bounds(const Sphere<T>& sp) noexcept {
+    Box<T> b;
+    if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return b;
+    const Vertex<T> r{sp.radius, sp.radius, sp.radius};
+    b.grow(sp.center - r), b.grow(sp.center + r);
+    return b;
+}
+/// The box of a triangle (empty for one no ray can hit).
+template <class T>
+[[nodiscard]] inline Box<T> bounds(const Triangle<T>& tri) noexcept {
+    return Bvh<T>::bounds(tri);
+}
+template <class T>
+[[nodiscard]] inline Box<T> bounds(const TexturedTriangle<T>& tri) noexcept {
+    return bounds(tri.triangle);
 }
 
 template <class T>
@@ -94,31 +118,18 @@ template <class T> [[nodiscard]] constexpr const Triangle<T>* triangle_of(const 
 template <class T> [[nodiscard]] constexpr const Triangle<T>* triangle_of(const TexturedTriangle<T>& t) noexcept { return &t.triangle; }
 template <class T> [[nodiscard]] constexpr const Triangle<T>* triangle_of(const Sphere<T>&) noexcept { return nullptr; }
 
-/// Whether a primitive kind is a triangle (scenes then also keep it in a TriangleBatch).
+/// Whether a primitive kind is a triangle: a Bvh of it tests blocks of 8 with the watertight
+/// test, and a TriangleBatch can hold it.
 template <class Shape> struct is_triangle_kind : std::false_type {};
 template <class T> struct is_triangle_kind<Triangle<T>> : std::true_type {};
 template <class T> struct is_triangle_kind<TexturedTriangle<T>> : std::true_type {};
 
-namespace detail {
-struct NoBatch {};
-// What a scene keeps to speed up one triangle kind: the vectorised batch (always, it is cheap)
-// and a BVH (built by commit() when the kind is large enough).
-template <class T>
-struct TriangleAcceleration {
-    TriangleBatch<T> batch;
-    std::shared_ptr<const Bvh<T>> bvh; // immutable once built: copies of the scene share it
-    bool opaque = true;                // every triangle of the kind has transparency 0
-};
-template <class T, class Shape>
-using BatchFor = std::conditional_t<is_triangle_kind<Shape>::value, TriangleAcceleration<T>, NoBatch>;
-} // namespace detail
-
-/// How a scene finds hits among the triangles of one kind ("model no more than a scene needs").
+/// How a scene finds hits among the objects of one kind ("model no more than a scene needs").
 enum class Acceleration {
-    automatic, ///< by size: one by one, TriangleBatch from batch_min, Bvh from bvh_min once committed
-    none,      ///< one triangle after another
-    batch,     ///< TriangleBatch: Möller–Trumbore over structure-of-arrays, vectorised
-    bvh        ///< Bvh: 8-wide bounding volume hierarchy, watertight triangle test
+    automatic, ///< by size, once committed: a Bvh from bvh_min (triangles) or shape_bvh_min, TriangleBatch from batch_min
+    none,      ///< one object after another
+    batch,     ///< triangles: TriangleBatch, Möller–Trumbore over structure-of-arrays, vectorised
+    bvh        ///< a Bvh of the kind (triangles: watertight test on blocks of 8)
 };
 
 /// Normalised texture coordinates of a hit, or none: only textured triangles carry them (§10).
@@ -143,8 +154,29 @@ struct SurfacePoint {
     std::array<T, 2> st;
 };
 
+/// A mesh stored in a scene (Scene::add_mesh), to place again with add_instance.
+struct MeshId {
+    std::uint32_t index;
+};
+/// A placement of a mesh in a scene (add_mesh places it once, add_instance again).
+struct InstanceId {
+    std::uint32_t index;
+};
+
+namespace detail {
+// What a scene keeps to speed up one kind: the Bvh (triangle kinds: a triangle Bvh; others: a
+// tree over the objects' boxes) or, for triangles of middling count, the batch. Immutable once
+// built: copies of the scene share them.
+template <class T, class Shape>
+struct KindAcceleration {
+    std::shared_ptr<const Bvh<T>> triangles;   // triangle kinds
+    std::shared_ptr<const BvhTree<T>> objects; // other kinds
+    std::shared_ptr<const TriangleBatch<T>> batch;
+};
+} // namespace detail
+
 /// A scene of the primitive kinds `Shapes...` (each a template such as Sphere, Triangle,
-/// TexturedTriangle), in precision T.
+/// TexturedTriangle, or a user's), in precision T, and of meshes placed by instances.
 template <class T, template <class> class... Shapes>
 class Scene {
     static_assert(std::is_floating_point_v<T>, "isin::Scene needs a floating-point type");
@@ -153,6 +185,14 @@ class Scene {
 public:
     using value_type = T;
     static constexpr std::size_t kinds = sizeof...(Shapes);
+
+    /// What a scene's intersect leaves out (backface culling for primary rays, note §11): the
+    /// objects of each kind whose mask byte is non-zero, and the back faces of placed meshes
+    /// seen from the ray's origin (§11 method 1 with the eye there: the Bvh's leaf test skips them).
+    struct Culled {
+        std::array<std::vector<std::uint8_t>, kinds> objects;
+        bool mesh_backfaces = false;
+    };
 
     std::vector<Material<T>> materials;
     std::vector<PointLight<T>> lights;
@@ -166,11 +206,14 @@ public:
     /// hit of one ray: the batch wins from 4 triangles with -march=native (AVX-512) and from 4–8
     /// with plain -O3 (SSE2); on the note's scene (3 + 2 triangles) the scalar loop wins.
     std::size_t batch_min = 8;
-    /// Triangle kinds with at least this many triangles get a Bvh when the scene is committed
-    /// (add_mesh commits by itself). Measured crossover: see benchmarks/scaling and the README.
+    /// Triangle kinds with at least this many triangles get a Bvh when the scene is committed.
+    /// Measured crossover: see benchmarks/scaling and the README.
     std::size_t bvh_min = 64;
-    /// Overrides the choice by size for every triangle kind. Bvh and batch apply to
-    /// Möller–Trumbore scenes; the area test (triangle_method) always goes one by one.
+    /// Other kinds (spheres, users' kinds) with at least this many objects get a Bvh when the
+    /// scene is committed. Measured crossover for spheres: see benchmarks/scaling and the README.
+    std::size_t shape_bvh_min = 16;
+    /// Overrides the choice by size for every kind. Bvh and batch apply to Möller–Trumbore
+    /// scenes; the area test (triangle_method) always goes one by one.
     Acceleration acceleration = Acceleration::automatic;
 
     /// Adds a material; returns its index.
@@ -179,8 +222,8 @@ public:
         return static_cast<std::uint32_t>(materials.size() - 1);
     }
     /// Adds a texture; returns its index for Material::texture.
-    int add_texture(Texture<T> texture) {
-        textures.push_back(std::move(texture));
+    int add_texture(Texture<T> image) {
+        textures.push_back(std::move(image));
         return static_cast<int>(textures.size() - 1);
     }
     /// Adds a point light.
@@ -201,8 +244,8 @@ public:
                                     std::to_string(textures.size()) + " textures)");
         return textures[std::size_t(index)];
     }
-    /// Checks that every object's material and every material's texture (when ≥ 0) exist;
-    /// throws std::out_of_range naming the first that does not. render() calls it first.
+    /// Checks that every object's and mesh's materials and every material's texture (when ≥ 0)
+    /// exist; throws std::out_of_range naming the first that does not. render() calls it first.
     void validate() const {
         for (std::size_t i = 0; i < materials.size(); ++i)
             if (materials[i].texture >= 0 && std::size_t(materials[i].texture) >= textures.size())
@@ -212,58 +255,108 @@ public:
         for_each_kind([&](auto, const auto& vec) {
             for (std::size_t i = 0; i < vec.size(); ++i) (void)material(vec[i].material);
         });
+        for (const MeshEntry& m : meshes_) (void)material(m.material + m.largest_material_id);
     }
 
     /// Adds a primitive of one of the scene's kinds with a material index from add_material.
-    /// Throws std::out_of_range for an unknown material.
+    /// Throws std::out_of_range for an unknown material. The kind's acceleration is rebuilt by
+    /// the next commit(); until then the kind is tested one by one.
     template <class Shape>
-    void add(const Shape& shape, std::uint32_t material) {
-        if (material >= materials.size())
-            throw std::out_of_range("isin::Scene::add: material " + std::to_string(material) +
-                                    " does not exist (" + std::to_string(materials.size()) +
-                                    " materials)");
+    void add(const Shape& shape, std::uint32_t material_id) {
+        (void)material(material_id);
         constexpr std::size_t kind = index_of<Shape>();
-        std::get<kind>(objects_).push_back({shape, material});
-        if constexpr (is_triangle_kind<Shape>::value) {
-            auto& accel = std::get<kind>(batches_);
-            accel.batch.push_back(*triangle_of(shape));
-            accel.bvh.reset(); // stale: commit() builds it again
-        }
+        std::get<kind>(objects_).push_back({shape, material_id});
+        std::get<kind>(accel_) = {};
     }
 
-    /// Adds a whole mesh (e.g. from load_mesh) with one material, then commits the scene so a
-    /// large mesh gets its Bvh.
-    void add_mesh(const std::vector<Triangle<T>>& triangles, std::uint32_t material) {
-        for (const Triangle<T>& tri : triangles) add(tri, material);
-        commit();
+    /// Stores `mesh` (once, however often it is placed), builds its Bvh and places it once, where
+    /// it stands. Every triangle has `material`, or, when mesh.material is not empty, material +
+    /// mesh.material[i] (ids relative to `material`). Returns the handle for add_instance.
+    /// Throws std::invalid_argument for an invalid mesh (Mesh::validate), std::out_of_range for a
+    /// material that does not exist. The Bvh over the placements is built by commit(); until
+    /// then placements are tested one after another.
+    MeshId add_mesh(Mesh<T> mesh, std::uint32_t material_id, const BvhOptions& options = {}) {
+        mesh.validate();
+        MeshEntry entry;
+        entry.largest_material_id = mesh.material.empty() ? 0 : *std::max_element(mesh.material.begin(), mesh.material.end());
+        (void)material(material_id + entry.largest_material_id);
+        entry.material = material_id;
+        entry.mesh = std::make_shared<const Mesh<T>>(std::move(mesh));
+        entry.bvh = std::make_shared<const Bvh<T>>(*entry.mesh, options);
+        meshes_.push_back(std::move(entry));
+        const MeshId id{static_cast<std::uint32_t>(meshes_.size() - 1)};
+        (void)add_instance(id, Transform<T>::identity());
+        return id;
+    }
+    /// Adds a triangle soup as a mesh (three vertices a triangle), as add_mesh(Mesh).
+    MeshId add_mesh(const std::vector<Triangle<T>>& triangles, std::uint32_t material_id, const BvhOptions& options = {}) {
+        return add_mesh(Mesh<T>::from_triangles(triangles), material_id, options);
     }
 
-    /// Builds a Bvh for every triangle kind that uses one (by acceleration and bvh_min). Call it
-    /// after adding triangles one by one; until then the scene uses its other loops.
+    /// Places mesh `id` again, moved by `to_world` (any affine transform with det ≠ 0). Its faces
+    /// keep their sides: the front is the mesh's clockwise side, also under a mirroring transform
+    /// (whose world-space winding is reversed). Memory: a transform, not a copy of the mesh.
+    /// Throws std::out_of_range for an unknown id, std::invalid_argument for a transform that is
+    /// not finite or cannot be inverted.
+    InstanceId add_instance(MeshId id, const Transform<T>& to_world) {
+        if (id.index >= meshes_.size())
+            throw std::out_of_range("isin::Scene::add_instance: mesh " + std::to_string(id.index) + " does not exist");
+        const T det = to_world.determinant();
+        Instance inst;
+        inst.mesh = id.index;
+        inst.to_world = to_world;
+        inst.to_object = to_world.inverse();
+        bool finite = std::isfinite(det) && det != T(0);
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) finite = finite && std::isfinite(inst.to_object.m[i][j]);
+        if (!finite || !is_finite(to_world.d) || !is_finite(inst.to_object.d))
+            throw std::invalid_argument("isin::Scene::add_instance: the transform is not finite or cannot be inverted");
+        inst.identity = to_world.is_identity();
+        inst.box = world_box(meshes_[id.index].bvh->tree().bounds(), to_world);
+        instances_.push_back(inst);
+        top_.reset(); // stale: commit() builds it again
+        return InstanceId{static_cast<std::uint32_t>(instances_.size() - 1)};
+    }
+
+    /// Builds what the sizes call for: a Bvh or batch for each kind (by acceleration, bvh_min,
+    /// shape_bvh_min, batch_min) and the Bvh over the placed meshes. Call it after adding; until
+    /// then the scene tests the new objects and placements one by one. Adding N meshes costs N
+    /// mesh builds (in add_mesh) and one cheap build here, not N rebuilds of everything.
     void commit(const BvhOptions& options = {}) {
         for_each_kind([&](auto kind, const auto& vec) {
-            if constexpr (is_triangle_kind<typename std::decay_t<decltype(vec)>::value_type::shape_type>::value) {
-                auto& accel = std::get<kind>(batches_);
-                accel.bvh.reset();
-                accel.opaque = true;
-                for (const auto& obj : vec) accel.opaque = accel.opaque && !(material(obj.material).transparency > T(0));
-                if (!uses(Acceleration::bvh, vec.size())) return;
-                std::vector<Triangle<T>> tris;
-                tris.reserve(vec.size());
-                for (const auto& obj : vec) tris.push_back(*triangle_of(obj.shape));
-                accel.bvh = std::make_shared<const Bvh<T>>(tris, options);
+            using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
+            auto& accel = std::get<kind>(accel_);
+            accel = {};
+            if (uses(Acceleration::bvh, kind, vec.size())) {
+                if constexpr (is_triangle_kind<Shape>::value)
+                    accel.triangles = std::make_shared<const Bvh<T>>(
+                        vec.size(), [&vec](std::size_t i) { return *triangle_of(vec[i].shape); }, options);
+                else
+                    accel.objects = std::make_shared<const BvhTree<T>>(
+                        build_bvh<T>(vec.size(), [&vec](std::size_t i) { return bounds(vec[i].shape); }, options));
+            } else if constexpr (is_triangle_kind<Shape>::value) {
+                if (uses(Acceleration::batch, kind, vec.size())) {
+                    auto batch = std::make_shared<TriangleBatch<T>>();
+                    batch->reserve(vec.size());
+                    for (const auto& obj : vec) batch->push_back(*triangle_of(obj.shape));
+                    accel.batch = std::move(batch);
+                }
             }
         });
+        top_.reset();
+        if (instances_.size() > 1)
+            top_ = std::make_shared<const BvhTree<T>>(
+                build_bvh<T>(instances_.size(), [this](std::size_t i) { return instances_[i].box; }, options));
     }
 
     /// Adds a textured rectangle as the note's two right triangles (§10): corner `v0` (the right
     /// angle, texel (0,0)), `v1` = texel (w,0), `v2` = texel (0,h); the fourth corner is v1 + v2 − v0.
     template <class S = TexturedTriangle<T>>
     void add_textured_rectangle(const Vertex<T>& v0, const Vertex<T>& v1, const Vertex<T>& v2,
-                                std::uint32_t material) {
+                                std::uint32_t material_id) {
         const Vertex<T> v3 = v1 + v2 - v0;
-        add(S{{v0, v1, v2}, false}, material);
-        add(S{{v3, v2, v1}, true}, material);
+        add(S{{v0, v1, v2}, false}, material_id);
+        add(S{{v3, v2, v1}, true}, material_id);
     }
 
     /// The objects of one primitive kind.
@@ -271,87 +364,174 @@ public:
     [[nodiscard]] const std::vector<Object<Shape>>& objects() const noexcept {
         return std::get<std::vector<Object<Shape>>>(objects_);
     }
-    /// Whether the triangle kind Shape currently has a Bvh (built by commit() or add_mesh).
+    /// Whether the kind Shape currently has a Bvh (built by commit()).
     template <class Shape>
     [[nodiscard]] bool has_bvh() const noexcept {
-        static_assert(is_triangle_kind<Shape>::value, "only triangle kinds get a Bvh");
-        return bool(std::get<index_of<Shape>()>(batches_).bvh);
+        const auto& accel = std::get<index_of<Shape>()>(accel_);
+        return accel.triangles || accel.objects;
     }
-    /// Number of objects of all kinds.
+    /// Whether the placements have a Bvh over them (built by commit() from two placements on).
+    [[nodiscard]] bool has_instance_bvh() const noexcept { return bool(top_); }
+    /// Number of objects of all kinds (placed meshes not counted).
     [[nodiscard]] std::size_t size() const noexcept {
         return std::apply([](const auto&... v) { return (std::size_t(0) + ... + v.size()); }, objects_);
     }
-
-    /// Nearest hit with t in (0, t_max) over all objects (§3, §5: the smallest t is visible).
-    /// `skip`, if given, is one mask per kind (empty = none skipped): objects whose mask byte is
-    /// non-zero are ignored — the renderer's backface culling for primary rays. Triangles tested
-    /// by Möller–Trumbore go through the vectorised TriangleBatch, others one by one.
-    [[nodiscard]] SceneHit<T> intersect(const Ray<T>& ray,
-                                        T t_max = std::numeric_limits<T>::infinity(),
-                                        const std::array<std::vector<std::uint8_t>, kinds>* skip = nullptr) const {
-        SceneHit<T> best;
-        best.hit.t = t_max;
+    [[nodiscard]] std::size_t mesh_count() const noexcept { return meshes_.size(); }
+    [[nodiscard]] std::size_t instance_count() const noexcept { return instances_.size(); }
+    /// The stored mesh `id` and its Bvh.
+    [[nodiscard]] const Mesh<T>& mesh(MeshId id) const { return *meshes_.at(id.index).mesh; }
+    [[nodiscard]] const Bvh<T>& mesh_bvh(MeshId id) const { return *meshes_.at(id.index).bvh; }
+    /// Bytes held by the stored meshes, their Bvhs, the placements and their Bvh, the kinds'
+    /// objects and accelerations (not materials, lights or textures).
+    [[nodiscard]] std::size_t memory() const noexcept {
+        std::size_t bytes = instances_.capacity() * sizeof(Instance) + (top_ ? tree_memory(*top_) : 0);
+        for (const MeshEntry& m : meshes_)
+            bytes += m.bvh->memory() + m.mesh->positions.capacity() * sizeof(Vertex<T>) +
+                     m.mesh->indices.capacity() * sizeof(m.mesh->indices[0]) + m.mesh->normals.capacity() * sizeof(Vertex<T>) +
+                     m.mesh->uvs.capacity() * sizeof(m.mesh->uvs[0]) + m.mesh->material.capacity() * sizeof(std::uint32_t);
         for_each_kind([&](auto kind, const auto& vec) {
-            const std::uint8_t* mask = skip && !(*skip)[kind].empty() ? (*skip)[kind].data() : nullptr;
-            if constexpr (is_triangle_kind<typename std::decay_t<decltype(vec)>::value_type::shape_type>::value) {
-                const auto& accel = std::get<kind>(batches_);
-                if (accel.bvh && uses(Acceleration::bvh, vec.size())) {
-                    nearest_in_bvh(*accel.bvh, ray, mask, kind, best);
-                    return;
+            const auto& accel = std::get<kind>(accel_);
+            bytes += vec.capacity() * sizeof(vec[0]);
+            if (accel.triangles) bytes += accel.triangles->memory();
+            if (accel.objects) bytes += tree_memory(*accel.objects);
+            if (accel.batch) bytes += accel.batch->size() * 9 * sizeof(T);
+        });
+        return bytes;
+    }
+
+    /// Nearest hit with t in (0, t_max) over all objects and placed meshes (§3, §5: the smallest
+    /// t is visible). The hit's `geometry` says where: a kind (its position in the scene's list)
+    /// for an object, whose index is `primitive`; kinds + i for placement i of a mesh, whose
+    /// triangle is `primitive`. `culled`, if given, leaves out what it names (the renderer's
+    /// backface culling for primary rays). Throws only what a user's kind throws.
+    [[nodiscard]] Hit<T> intersect(const Ray<T>& ray, T t_max = std::numeric_limits<T>::infinity(),
+                                   const Culled* culled = nullptr) const {
+        Hit<T> best;
+        T t = t_max;
+        const auto take = [&](Hit<T> h, std::size_t geometry) {
+            if (!(h.t < t)) return;
+            t = h.t, best = h;
+            best.geometry = static_cast<std::uint32_t>(geometry);
+        };
+        for_each_kind([&](auto kind, const auto& vec) {
+            using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
+            const std::uint8_t* mask = culled && !culled->objects[kind].empty() ? culled->objects[kind].data() : nullptr;
+            const auto& accel = std::get<kind>(accel_);
+            if constexpr (is_triangle_kind<Shape>::value) {
+                if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) {
+                    HitFilter filter;
+                    filter.skip = mask;
+                    return take(accel.triangles->intersect(ray, t, filter), kind);
                 }
-                if (!mask && uses(Acceleration::batch, vec.size())) {
-                    if (const auto h = accel.batch.nearest(ray, best.hit.t)) best = {h.hit, kind, h.index};
-                    return;
-                }
+                if (accel.batch && !mask && uses(Acceleration::batch, kind, vec.size())) return take(accel.batch->nearest(ray, t), kind);
+            } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
+                traverse<Visit::nearest>(*accel.objects, ray, t, [&](std::uint32_t leaf, T&) {
+                    const auto& l = accel.objects->leaves()[leaf];
+                    for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
+                        const std::uint32_t i = accel.objects->primitives()[j];
+                        if (mask && mask[i]) continue;
+                        Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
+                        h.primitive = i;
+                        take(h, kind);
+                    }
+                    return false;
+                });
+                return;
             }
             for (std::size_t i = 0; i < vec.size(); ++i) {
                 if (mask && mask[i]) continue;
-                const Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
-                if (h.t < best.hit.t) best = {h, kind, i};
+                Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
+                h.primitive = static_cast<std::uint32_t>(i);
+                take(h, kind);
             }
         });
-        if (!(best.hit.t < t_max)) return SceneHit<T>{};
+        const bool cull = culled && culled->mesh_backfaces;
+        for_each_instance(ray, t, [&](std::uint32_t i, T&) {
+            const Instance& inst = instances_[i];
+            HitFilter filter;
+            filter.cull_backfaces = cull; // in the mesh's own space: a mirrored copy keeps its outside
+            take(meshes_[inst.mesh].bvh->intersect(object_ray(inst, ray), t, filter), kinds + i);
+            return false;
+        });
         return best;
     }
 
     /// Fraction of light that reaches along `ray` up to t_max: 1 when nothing is in the way, the
-    /// product of the transparencies of the objects crossed otherwise (0 for an opaque one).
+    /// product of the transparencies of the objects crossed otherwise (0 for an opaque one, at
+    /// which it stops). Every kind and placed mesh goes through its Bvh's all-hits traversal.
     [[nodiscard]] T transmittance(const Ray<T>& ray, T t_max) const {
         T through = T(1);
+        // Multiplies in the transparency of material m; false once nothing gets through.
+        const auto pass = [&](std::uint32_t m) {
+            through *= material(m).transparency;
+            return through > T(0);
+        };
         for_each_kind([&](auto kind, const auto& vec) {
+            using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
             if (!(through > T(0))) return;
-            if constexpr (is_triangle_kind<typename std::decay_t<decltype(vec)>::value_type::shape_type>::value) {
-                const auto& accel = std::get<kind>(batches_);
-                if (accel.bvh && accel.opaque && uses(Acceleration::bvh, vec.size())) {
-                    if (accel.bvh->occluded(ray, t_max)) through = T(0); // §9: any opaque hit shadows
+            const auto& accel = std::get<kind>(accel_);
+            if constexpr (is_triangle_kind<Shape>::value) {
+                if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) {
+                    accel.triangles->for_each_hit(ray, t_max, [&](std::uint32_t i, const Hit<T>&) { return pass(vec[i].material); });
                     return;
                 }
-                if (uses(Acceleration::batch, vec.size())) {
-                    accel.batch.each_hit(ray, t_max, [&](std::size_t i, T) {
-                        through *= material(vec[i].material).transparency;
-                        return through > T(0);
-                    });
+                if (accel.batch && uses(Acceleration::batch, kind, vec.size())) {
+                    accel.batch->each_hit(ray, t_max, [&](std::size_t i, T) { return pass(vec[i].material); });
                     return;
                 }
+            } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
+                T t = t_max;
+                traverse<Visit::any>(*accel.objects, ray, t, [&](std::uint32_t leaf, T&) {
+                    const auto& l = accel.objects->leaves()[leaf];
+                    for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
+                        const std::uint32_t i = accel.objects->primitives()[j];
+                        if (intersect_primitive(ray, vec[i].shape, triangle_method).t < t_max && !pass(vec[i].material)) return true;
+                    }
+                    return false;
+                });
+                return;
             }
-            for (std::size_t i = 0; i < vec.size() && through > T(0); ++i) {
-                const Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
-                if (h.t < t_max) through *= material(vec[i].material).transparency;
-            }
+            for (std::size_t i = 0; i < vec.size() && through > T(0); ++i)
+                if (intersect_primitive(ray, vec[i].shape, triangle_method).t < t_max) (void)pass(vec[i].material);
         });
-        return through;
+        if (!(through > T(0))) return T(0);
+        T t = t_max;
+        for_each_instance(ray, t, [&](std::uint32_t i, T&) {
+            const Instance& inst = instances_[i];
+            const MeshEntry& m = meshes_[inst.mesh];
+            return m.bvh->for_each_hit(object_ray(inst, ray), t_max, [&](std::uint32_t tri, const Hit<T>&) {
+                return pass(m.material + (m.mesh->material.empty() ? 0 : m.mesh->material[tri]));
+            });
+        });
+        return through > T(0) ? through : T(0);
     }
 
     /// Point, normal, material and texture coordinates of a hit of `ray`.
-    [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const SceneHit<T>& sh) const {
+    [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const Hit<T>& hit) const {
         SurfacePoint<T> sp{};
-        sp.point = ray.at(sh.hit.t);
+        sp.point = ray.at(hit.t);
+        if (hit.geometry >= kinds) { // a placed mesh
+            const Instance& inst = instances_.at(hit.geometry - kinds);
+            const MeshEntry& m = meshes_[inst.mesh];
+            const auto& k = m.mesh->indices.at(hit.primitive);
+            // §2 normal of the mesh's triangle (out of its clockwise face), to world space by the
+            // inverse transpose: out of the same side after any transform, mirrors included.
+            sp.normal = normalize(Transform<T>::normal(inst.to_object, normal(m.mesh->triangle(hit.primitive))));
+            sp.material = m.material + (m.mesh->material.empty() ? 0 : m.mesh->material[hit.primitive]);
+            sp.has_texture_coordinates = !m.mesh->uvs.empty();
+            if (sp.has_texture_coordinates) {
+                const auto &a = m.mesh->uvs[k[0]], &b = m.mesh->uvs[k[1]], &c = m.mesh->uvs[k[2]];
+                const T w = T(1) - hit.u - hit.v;
+                sp.st = {w * a[0] + hit.u * b[0] + hit.v * c[0], w * a[1] + hit.u * b[1] + hit.v * c[1]};
+            }
+            return sp;
+        }
         for_each_kind([&](auto kind, const auto& vec) {
-            if (kind != sh.kind) return;
-            const auto& obj = vec[sh.index];
-            sp.normal = surface_normal(obj.shape, sp.point, sh.hit);
+            if (kind != hit.geometry) return;
+            const auto& obj = vec.at(hit.primitive);
+            sp.normal = surface_normal(obj.shape, sp.point, hit);
             sp.material = obj.material;
-            sp.has_texture_coordinates = texture_coordinates(obj.shape, sh.hit, sp.st);
+            sp.has_texture_coordinates = texture_coordinates(obj.shape, hit, sp.st);
         });
         return sp;
     }
@@ -363,29 +543,64 @@ public:
     }
 
 private:
-    // Whether a triangle kind of n triangles is tested with acceleration `a`.
-    [[nodiscard]] bool uses(Acceleration a, std::size_t n) const noexcept {
+    struct MeshEntry {
+        std::shared_ptr<const Mesh<T>> mesh; // shared by copies of the scene
+        std::shared_ptr<const Bvh<T>> bvh;
+        std::uint32_t material = 0, largest_material_id = 0;
+    };
+    struct Instance {
+        std::uint32_t mesh = 0;
+        Transform<T> to_world, to_object;
+        bool identity = true;
+        Box<T> box; // in the world
+    };
+
+    // Whether kind `kind` of n objects is tested with acceleration `a`.
+    [[nodiscard]] bool uses(Acceleration a, std::size_t kind, std::size_t n) const noexcept {
         if (triangle_method != TriangleMethod::moller_trumbore) return false;
         if (acceleration != Acceleration::automatic) return acceleration == a;
-        // Callers try the Bvh first; a kind whose Bvh is not built (yet) still gets the batch.
-        return n >= (a == Acceleration::bvh ? bvh_min : batch_min);
+        if (a == Acceleration::batch) return triangle_kind(kind) && n >= batch_min;
+        return n >= (triangle_kind(kind) ? bvh_min : shape_bvh_min);
+    }
+    [[nodiscard]] static constexpr bool triangle_kind(std::size_t kind) noexcept {
+        constexpr bool is[] = {is_triangle_kind<Shapes<T>>::value...};
+        return is[kind];
     }
 
-    // Nearest hit in a kind's Bvh. With a culling mask, a culled nearest hit is stepped over
-    // (the ray restarts just past it) until an unculled one or a miss, at most 16 times.
-    void nearest_in_bvh(const Bvh<T>& bvh, const Ray<T>& ray, const std::uint8_t* mask, std::size_t kind,
-                        SceneHit<T>& best) const noexcept {
-        T t0 = T(0);
-        for (int step = 0; step < 16; ++step) {
-            const Ray<T> part{t0 > T(0) ? ray.at(t0) : ray.origin, ray.direction};
-            const BvhHit<T> h = bvh.intersect(part, best.hit.t - t0);
-            if (!h) return;
-            if (!mask || !mask[h.primitive]) {
-                best = {Hit<T>{t0 + h.t, h.u, h.v}, kind, h.primitive};
-                return;
-            }
-            t0 += h.t * (T(1) + T(64) * std::numeric_limits<T>::epsilon()) + std::numeric_limits<T>::min();
+    // The ray in placement `inst`'s mesh space: same t for the same point (affine map).
+    [[nodiscard]] static Ray<T> object_ray(const Instance& inst, const Ray<T>& ray) noexcept {
+        if (inst.identity) return ray;
+        return {inst.to_object.point(ray.origin), inst.to_object.vector(ray.direction)};
+    }
+
+    // Calls visit(i, t_max) for each placement the ray may meet: through their Bvh when there is
+    // one, else all of them; visit returns true to stop.
+    template <class Visit_>
+    void for_each_instance(const Ray<T>& ray, T& t_max, Visit_&& visit) const {
+        if (top_) {
+            traverse<Visit::nearest>(*top_, ray, t_max, [&](std::uint32_t leaf, T& t) {
+                const auto& l = top_->leaves()[leaf];
+                for (std::uint32_t j = l.first; j < l.first + l.count; ++j)
+                    if (visit(top_->primitives()[j], t)) return true;
+                return false;
+            });
+            return;
         }
+        for (std::size_t i = 0; i < instances_.size(); ++i)
+            if (visit(static_cast<std::uint32_t>(i), t_max)) return;
+    }
+
+    // The world box of a mesh box moved by `to_world`: the box of its 8 moved corners.
+    [[nodiscard]] static Box<T> world_box(const Box<T>& b, const Transform<T>& to_world) noexcept {
+        Box<T> w;
+        if (!(b.lo.x <= b.hi.x)) return w;
+        for (int c = 0; c < 8; ++c)
+            w.grow(to_world.point({(c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z}));
+        return w;
+    }
+    [[nodiscard]] static std::size_t tree_memory(const BvhTree<T>& tree) noexcept {
+        return tree.node_count() * sizeof(typename BvhTree<T>::Node) + tree.leaf_count() * sizeof(typename BvhTree<T>::Leaf) +
+               tree.size() * sizeof(std::uint32_t);
     }
 
     template <class Shape, std::size_t I = 0>
@@ -401,7 +616,10 @@ private:
     }
 
     std::tuple<std::vector<Object<Shapes<T>>>...> objects_;
-    std::tuple<detail::BatchFor<T, Shapes<T>>...> batches_; // triangle kinds only
+    std::tuple<detail::KindAcceleration<T, Shapes<T>>...> accel_;
+    std::vector<MeshEntry> meshes_;
+    std::vector<Instance> instances_;
+    std::shared_ptr<const BvhTree<T>> top_; // over instances_' boxes, from two placements on
 };
 
 } // namespace isin

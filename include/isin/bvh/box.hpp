@@ -1,0 +1,118 @@
+#pragma once
+/// isin — axis-aligned boxes: what a Bvh is built from (a primitive's bounds) and what its nodes
+/// hold; plus the lane types the build and traversal use.
+#include <algorithm>
+#include <limits>
+#include <memory>
+#include <type_traits>
+#include <utility>
+
+#include "../vec.hpp"
+
+#if defined(__GNUC__) || defined(__clang__)
+#define ISIN_VECTOR_EXTENSIONS 1
+#else
+#define ISIN_VECTOR_EXTENSIONS 0
+#endif
+
+namespace isin {
+
+/// An axis-aligned box [lo, hi]; the default box is empty (lo = +∞ > hi = −∞). The bounds of a
+/// primitive for a Bvh.
+template <class T>
+struct Box {
+    static_assert(std::is_floating_point_v<T>, "isin::Box needs a floating-point type");
+    Vertex<T> lo{std::numeric_limits<T>::infinity(), std::numeric_limits<T>::infinity(), std::numeric_limits<T>::infinity()};
+    Vertex<T> hi{-std::numeric_limits<T>::infinity(), -std::numeric_limits<T>::infinity(), -std::numeric_limits<T>::infinity()};
+
+    /// Grows to take in p.
+    void grow(const Vertex<T>& p) noexcept {
+        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    /// Grows to the union; an empty b changes nothing.
+    void grow(const Box& b) noexcept {
+        lo = {std::min(lo.x, b.lo.x), std::min(lo.y, b.lo.y), std::min(lo.z, b.lo.z)};
+        hi = {std::max(hi.x, b.hi.x), std::max(hi.y, b.hi.y), std::max(hi.z, b.hi.z)};
+    }
+    /// True when the box holds at least one point and every bound is finite: a Bvh takes only
+    /// such boxes (primitives with others are left out).
+    [[nodiscard]] bool usable() const noexcept {
+        return lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z && is_finite(lo) && is_finite(hi);
+    }
+    /// The SAH's measure of the surface: a quarter of the half area, from half extents, so that
+    /// no box of finite coordinates gives NaN (an extent hi − lo would overflow for coordinates
+    /// beyond ±max/2, and ∞·0 is NaN). Boxes wider than about √max (1.8e19 in float) measure +∞:
+    /// their costs compare as unknown and the build splits them at the median. Only ratios of it
+    /// matter. 0 for an empty box.
+    [[nodiscard]] T area() const noexcept {
+        const Vertex<T> e = hi * T(0.5) - lo * T(0.5);
+        return e.x < T(0) ? T(0) : e.x * e.y + e.y * e.z + e.z * e.x;
+    }
+};
+
+namespace detail {
+
+/// Index of the lowest set bit of a non-zero mask.
+inline int lowest_bit(unsigned mask) noexcept {
+#if ISIN_VECTOR_EXTENSIONS
+    return __builtin_ctz(mask);
+#else
+    int k = 0;
+    while (!((mask >> k) & 1u)) ++k;
+    return k;
+#endif
+}
+
+// Eight and four lanes of T as GCC/Clang vectors. Values of these types never cross a function
+// boundary (that would depend on the target's vector ABI); all lane code is written inline.
+#if ISIN_VECTOR_EXTENSIONS
+template <class T> struct Lanes8 { typedef T type __attribute__((vector_size(8 * sizeof(T)))); };
+template <class T> using L8 = typename Lanes8<T>::type;
+template <class T> struct Lanes4 { typedef T type __attribute__((vector_size(4 * sizeof(T)))); };
+template <class T> using L4 = typename Lanes4<T>::type;
+#else
+template <class T> struct L4 {
+    T v[4];
+    T& operator[](int i) noexcept { return v[i]; }
+    const T& operator[](int i) const noexcept { return v[i]; }
+};
+#endif
+
+// A box as two 4-lane vectors (x, y, z, unused), so that growing it is two vector min/max: the
+// binning loop's inner operation. Falls back to scalar lanes without vector extensions.
+template <class T>
+struct Box4 {
+    L4<T> lo, hi;
+    Box4() noexcept {
+        for (int a = 0; a < 4; ++a) lo[a] = std::numeric_limits<T>::infinity(), hi[a] = -std::numeric_limits<T>::infinity();
+    }
+    void grow(const L4<T>& plo, const L4<T>& phi) noexcept {
+#if ISIN_VECTOR_EXTENSIONS
+        lo = lo < plo ? lo : plo;
+        hi = hi > phi ? hi : phi;
+#else
+        for (int a = 0; a < 4; ++a) lo[a] = std::min(lo[a], plo[a]), hi[a] = std::max(hi[a], phi[a]);
+#endif
+    }
+    void grow(const Box4& b) noexcept { grow(b.lo, b.hi); }
+    [[nodiscard]] Box<T> box() const noexcept {
+        Box<T> b;
+        if (lo[0] <= hi[0]) b.lo = {lo[0], lo[1], lo[2]}, b.hi = {hi[0], hi[1], hi[2]};
+        return b;
+    }
+};
+
+// An allocator whose value-less construct() leaves trivial values uninitialised, so that
+// resizing a vector that the build then fills in parallel does not first zero it serially.
+template <class T>
+struct UninitAllocator : std::allocator<T> {
+    template <class U> struct rebind { using other = UninitAllocator<U>; };
+    UninitAllocator() = default;
+    template <class U> UninitAllocator(const UninitAllocator<U>&) noexcept {}
+    template <class U> void construct(U* p) noexcept { ::new (static_cast<void*>(p)) U; }
+    template <class U, class... A> void construct(U* p, A&&... a) { ::new (static_cast<void*>(p)) U(std::forward<A>(a)...); }
+};
+
+} // namespace detail
+} // namespace isin

@@ -1,0 +1,128 @@
+#pragma once
+/// isin — the hierarchy of a Bvh, and nothing else: 8-wide nodes (children's boxes in
+/// structure-of-arrays order) and leaves, each a range of primitive indices. It knows no
+/// primitive: traversal (traverse.hpp) hands each leaf to the caller's leaf test, and the build
+/// (build.hpp) is a separate object whose state ends with it.
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <type_traits>
+#include <vector>
+
+#include "box.hpp"
+
+namespace isin {
+
+namespace detail {
+template <class T> class BvhBuilder;
+}
+
+/// Build options of a Bvh.
+struct BvhOptions {
+    int threads = 0;   ///< build threads; 0 = std::thread::hardware_concurrency()
+    int leaf_size = 8; ///< SAH leaves hold at most this many primitives (1…8)
+};
+
+/// A bounding volume hierarchy over primitives known only by their boxes; see the top of this
+/// header.
+template <class T>
+class BvhTree {
+    static_assert(std::is_floating_point_v<T>, "isin::BvhTree needs float or double");
+
+public:
+    /// Levels of 8-wide nodes on the longest path; never above this, whatever the input (the
+    /// build splits at the median below a fixed depth, and primitives are counted in 32 bits).
+    static constexpr int depth_limit = 40 + 32;
+    /// A child reference: a node index, a leaf index | leaf_bit, or empty_child.
+    static constexpr std::uint32_t leaf_bit = 0x80000000u;
+    static constexpr std::uint32_t empty_child = 0xffffffffu;
+
+    /// 8 children: boxes in structure-of-arrays order and references; an empty slot has an empty
+    /// box (lo = +∞ > hi = −∞). A child node's index is larger than its parent's.
+    struct alignas(64) Node {
+        T lo[3][8], hi[3][8];
+        std::uint32_t child[8];
+    };
+    /// A leaf: primitives()[first, first + count), count in 1…8.
+    struct Leaf {
+        std::uint32_t first, count;
+    };
+
+    /// Number of primitives in the tree (those with usable boxes).
+    [[nodiscard]] std::size_t size() const noexcept { return primitives_.size(); }
+    [[nodiscard]] bool empty() const noexcept { return nodes_.empty(); }
+    [[nodiscard]] std::size_t node_count() const noexcept { return nodes_.size(); }
+    [[nodiscard]] std::size_t leaf_count() const noexcept { return leaves_.size(); }
+    /// Levels of 8-wide nodes on the longest path from the root to a leaf (0 when empty).
+    [[nodiscard]] int depth() const noexcept { return nodes_.empty() ? 0 : depth_below(0); }
+
+    [[nodiscard]] const std::vector<Node>& nodes() const noexcept { return nodes_; }
+    [[nodiscard]] const std::vector<Leaf>& leaves() const noexcept { return leaves_; }
+    /// Primitive indices, leaf after leaf.
+    [[nodiscard]] const std::vector<std::uint32_t>& primitives() const noexcept { return primitives_; }
+    /// The largest |coordinate| of any box: traversal checks with it whether a ray's slab
+    /// products can overflow.
+    [[nodiscard]] T bound() const noexcept { return bound_; }
+
+    /// The union of all boxes (empty when the tree is).
+    [[nodiscard]] Box<T> bounds() const noexcept {
+        Box<T> b;
+        if (nodes_.empty()) return b;
+        for (int k = 0; k < 8; ++k) b.grow(child_box(nodes_[0], k));
+        return b;
+    }
+
+    /// Refit: recomputes every box from `box_of(primitive)` (a Box<T>), keeping the topology —
+    /// for primitives that moved. Cost O(n), no allocation; the tree stays correct whatever the
+    /// new boxes (a primitive whose box became empty or non-finite is simply never entered), but
+    /// its quality falls as primitives move away from where it was built.
+    template <class BoxOf>
+    void refit(BoxOf&& box_of) {
+        bound_ = T(0);
+        for (std::size_t i = nodes_.size(); i-- > 0;) { // children before parents (larger indices)
+            Node& n = nodes_[i];
+            for (int k = 0; k < 8; ++k) {
+                const std::uint32_t c = n.child[k];
+                if (c == empty_child) continue;
+                Box<T> b;
+                if (c & leaf_bit) {
+                    const Leaf& leaf = leaves_[c & ~leaf_bit];
+                    for (std::uint32_t j = 0; j < leaf.count; ++j) {
+                        const Box<T> p = box_of(primitives_[leaf.first + j]);
+                        if (p.usable()) b.grow(p);
+                    }
+                } else {
+                    for (int m = 0; m < 8; ++m) b.grow(child_box(nodes_[c], m));
+                }
+                set_box(n, k, b);
+                if (b.lo.x <= b.hi.x) bound_ = std::max(bound_, std::max(max_abs(b.lo), max_abs(b.hi)));
+            }
+        }
+    }
+
+private:
+    friend class detail::BvhBuilder<T>;
+
+    [[nodiscard]] static Box<T> child_box(const Node& n, int k) noexcept {
+        Box<T> b;
+        b.lo = {n.lo[0][k], n.lo[1][k], n.lo[2][k]}, b.hi = {n.hi[0][k], n.hi[1][k], n.hi[2][k]};
+        return b;
+    }
+    static void set_box(Node& n, int k, const Box<T>& b) noexcept {
+        for (int a = 0; a < 3; ++a) n.lo[a][k] = component(b.lo, a), n.hi[a][k] = component(b.hi, a);
+    }
+    [[nodiscard]] int depth_below(std::uint32_t node) const noexcept {
+        int deepest = 0;
+        for (const std::uint32_t c : nodes_[node].child)
+            if (c != empty_child && !(c & leaf_bit)) deepest = std::max(deepest, depth_below(c));
+        return deepest + 1;
+    }
+
+    std::vector<Node> nodes_;
+    std::vector<Leaf> leaves_;
+    std::vector<std::uint32_t> primitives_;
+    T bound_ = T(0);
+};
+
+} // namespace isin

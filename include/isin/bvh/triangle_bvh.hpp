@@ -1,0 +1,181 @@
+#pragma once
+/// isin — Bvh<T>: a BvhTree over triangles with their blocks, and the leaf tests for the nearest
+/// hit, any hit and every hit, with backface culling and a skip mask as filters of the leaf test.
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "../hit.hpp"
+#include "../indexed_mesh.hpp"
+#include "../ray.hpp"
+#include "../triangle.hpp"
+#include "build.hpp"
+#include "traverse.hpp"
+#include "tree.hpp"
+#include "triangles.hpp"
+
+namespace isin {
+
+/// Which hits of a triangle Bvh count, beyond t in (0, t_max).
+struct HitFilter {
+    /// Front faces only: clockwise seen from the ray's origin (§2), i.e. §11 method 1 with the
+    /// eye at the origin: a triangle whose normal points away from it is skipped.
+    bool cull_backfaces = false;
+    /// When set, a triangle with skip[index] ≠ 0 is ignored (e.g. culled by §11 method 2).
+    const std::uint8_t* skip = nullptr;
+};
+
+/// Bounding volume hierarchy over triangles: binned SAH, 8-wide nodes, leaves of up to 8
+/// triangles tested 8 at a time by the watertight test. Float and double.
+template <class T>
+class Bvh {
+    static_assert(std::is_floating_point_v<T>, "isin::Bvh needs float or double");
+
+public:
+    static constexpr int depth_limit = BvhTree<T>::depth_limit;
+
+    /// Builds over `triangles`; hits report indices into this vector. Zero-area and non-finite
+    /// triangles are left out (no ray can hit them).
+    explicit Bvh(const std::vector<Triangle<T>>& triangles, const BvhOptions& options = {})
+        : Bvh(triangles.size(), [&triangles](std::size_t i) { return triangles[i]; }, options) {}
+
+    /// Builds over the triangles of `mesh`; hits report triangle indices. Throws
+    /// std::invalid_argument for an invalid mesh (Mesh::validate).
+    explicit Bvh(const Mesh<T>& mesh, const BvhOptions& options = {})
+        : Bvh((mesh.validate(), mesh.size()), [&mesh](std::size_t i) { return mesh.triangle(i); }, options) {}
+
+    /// Builds over n triangles given by `triangle_of(i)`.
+    template <class TriangleOf>
+    Bvh(std::size_t n, const TriangleOf& triangle_of, const BvhOptions& options)
+        : tree_(build_bvh<T>(n, [&](std::size_t i) { return bounds(triangle_of(i)); }, options)),
+          blocks_(tree_, triangle_of, detail::thread_count(options.threads)) {}
+
+    /// Nearest hit with t in (0, t_max), watertight: a ray through an edge shared by two
+    /// triangles hits at least one of them. Any direction works (t in units of |direction|).
+    /// The hit's `primitive` is the triangle's index.
+    [[nodiscard]] Hit<T> intersect(const Ray<T>& ray, T t_max = std::numeric_limits<T>::infinity(),
+                                   const HitFilter& filter = {}) const noexcept {
+        Hit<T> best;
+        T t = t_max;
+        detail::TriangleRay<T> r(ray);
+        const auto nearest = [&](auto cull) {
+            traverse<Visit::nearest>(tree_, ray, t, [&](std::uint32_t leaf, T& t_far) {
+                detail::LaneHits<T> hits;
+                const unsigned lanes = lanes_hit<decltype(cull)::value>(leaf, r, t_far, hits, filter.skip);
+                if (!lanes) return false;
+                const int k = detail::nearest_lane(lanes, hits);
+                t_far = hits.t[k];
+                best = {hits.t[k], hits.u[k], hits.v[k], blocks_[leaf].primitive[k]};
+                return false;
+            });
+        };
+        if (filter.cull_backfaces) nearest(std::true_type{});
+        else nearest(std::false_type{});
+        return best;
+    }
+
+    /// True when any triangle is hit with t in (0, t_max): shadow rays; stops at the first hit.
+    [[nodiscard]] bool occluded(const Ray<T>& ray, T t_max, const HitFilter& filter = {}) const noexcept {
+        if (filter.skip) return for_each_hit(ray, t_max, [](std::uint32_t, const Hit<T>&) { return false; }, filter);
+        T t = t_max;
+        detail::TriangleRay<T> r(ray);
+        const auto any = [&](auto cull) {
+            return traverse<Visit::any>(tree_, ray, t, [&](std::uint32_t leaf, T& t_far) {
+                detail::LaneHits<T> unused;
+                return r.ready() && detail::test_block<decltype(cull)::value, false>(blocks_[leaf], r, t_far, unused) != 0;
+            });
+        };
+        return filter.cull_backfaces ? any(std::true_type{}) : any(std::false_type{});
+    }
+
+    /// Calls f(index, hit) for every triangle hit with t in (0, t_max), once each, in no
+    /// particular order; f returns true to go on, false to stop. Returns true when f stopped it.
+    /// Transmittance through transparent triangles: multiply, stop at an opaque one.
+    template <class F>
+    bool for_each_hit(const Ray<T>& ray, T t_max, F&& f, const HitFilter& filter = {}) const {
+        T t = t_max;
+        detail::TriangleRay<T> r(ray);
+        const auto all = [&](auto cull) {
+            return traverse<Visit::any>(tree_, ray, t, [&](std::uint32_t leaf, T& t_far) {
+                detail::LaneHits<T> hits;
+                unsigned lanes = lanes_hit<decltype(cull)::value>(leaf, r, t_far, hits, filter.skip);
+                const auto& block = blocks_[leaf];
+                for (; lanes; lanes &= lanes - 1) {
+                    const int k = detail::lowest_bit(lanes);
+                    if (detail::is_padding(block, k)) continue;
+                    if (!f(block.primitive[k], Hit<T>{hits.t[k], hits.u[k], hits.v[k], block.primitive[k]})) return true;
+                }
+                return false;
+            });
+        };
+        return filter.cull_backfaces ? all(std::true_type{}) : all(std::false_type{});
+    }
+
+    /// Updates the Bvh after the triangles moved (same count, same order): the boxes and blocks
+    /// are recomputed, the tree's shape kept. Far cheaper than a rebuild; the tree gets slower to
+    /// trace the further the triangles move from where it was built. Triangles left out at the
+    /// build (zero-area, non-finite) stay out.
+    void refit(const std::vector<Triangle<T>>& triangles, int threads = 0) {
+        refit_with([&triangles](std::size_t i) { return triangles[i]; }, threads);
+    }
+    /// As refit(triangles), for a mesh whose positions changed (same indices).
+    void refit(const Mesh<T>& mesh, int threads = 0) {
+        mesh.validate();
+        refit_with([&mesh](std::size_t i) { return mesh.triangle(i); }, threads);
+    }
+
+    /// Number of triangles the Bvh holds (after leaving out degenerate ones).
+    [[nodiscard]] std::size_t size() const noexcept { return tree_.size(); }
+    /// Number of 8-wide nodes and of leaf blocks.
+    [[nodiscard]] std::size_t node_count() const noexcept { return tree_.node_count(); }
+    [[nodiscard]] std::size_t leaf_count() const noexcept { return tree_.leaf_count(); }
+    /// Levels of 8-wide nodes on the longest path (≤ depth_limit).
+    [[nodiscard]] int depth() const noexcept { return tree_.depth(); }
+    /// The hierarchy and the blocks, for callers with their own leaf tests.
+    [[nodiscard]] const BvhTree<T>& tree() const noexcept { return tree_; }
+    [[nodiscard]] const TriangleBlocks<T>& blocks() const noexcept { return blocks_; }
+    /// Bytes held (nodes, leaves, indices, blocks).
+    [[nodiscard]] std::size_t memory() const noexcept {
+        return tree_.node_count() * sizeof(typename BvhTree<T>::Node) + tree_.leaf_count() * sizeof(typename BvhTree<T>::Leaf) +
+               tree_.size() * sizeof(std::uint32_t) + blocks_.size() * sizeof(typename TriangleBlocks<T>::Block);
+    }
+
+    /// The box of a triangle; empty for one no ray can hit (non-finite or zero area), which the
+    /// build leaves out.
+    [[nodiscard]] static Box<T> bounds(const Triangle<T>& tri) noexcept {
+        Box<T> b;
+        const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+        if (!is_finite(tri.v0) || !is_finite(tri.v1) || !is_finite(tri.v2) || detail::is_degenerate(e1, e2, cross(e1, e2)))
+            return b;
+        b.grow(tri.v0), b.grow(tri.v1), b.grow(tri.v2);
+        return b;
+    }
+
+private:
+    // The lanes of leaf `leaf` hit with 0 < t < t_max, without the skipped triangles.
+    template <bool cull>
+    unsigned lanes_hit(std::uint32_t leaf, detail::TriangleRay<T>& r, T t_max, detail::LaneHits<T>& hits,
+                       const std::uint8_t* skip) const noexcept {
+        if (!r.ready()) return 0;
+        const auto& block = blocks_[leaf];
+        unsigned lanes = detail::test_block<cull>(block, r, t_max, hits);
+        if (skip)
+            for (unsigned rest = lanes; rest; rest &= rest - 1) {
+                const int k = detail::lowest_bit(rest);
+                if (skip[block.primitive[k]]) lanes &= ~(1u << k);
+            }
+        return lanes;
+    }
+
+    template <class TriangleOf>
+    void refit_with(const TriangleOf& triangle_of, int threads) {
+        blocks_.refit(tree_, triangle_of, detail::thread_count(threads));
+        tree_.refit([&](std::uint32_t i) { return bounds(triangle_of(i)); });
+    }
+
+    BvhTree<T> tree_;
+    TriangleBlocks<T> blocks_;
+};
+
+} // namespace isin

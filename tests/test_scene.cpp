@@ -1,0 +1,193 @@
+// Scenes: each kind's acceleration against the plain loop, transparent shadows through a Bvh,
+// users' kinds, placed meshes (instances) against the same triangles moved into the world.
+#include <isin/render.hpp>
+
+#include <doctest/doctest.h>
+
+#include "approx.hpp"
+#include "../benchmarks/workloads.hpp"
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace user {
+
+/// A user's kind: an axis-aligned cube given by its centre and half side; it needs only these
+/// four functions to live in a scene with a Bvh of its own.
+template <class T>
+struct Cube {
+    isin::Vertex<T> center;
+    T half;
+};
+template <class T>
+isin::Hit<T> intersect_primitive(const isin::Ray<T>& ray, const Cube<T>& c, isin::TriangleMethod) noexcept {
+    T t0 = T(0), t1 = std::numeric_limits<T>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        const T o = isin::component(ray.origin, a), d = isin::component(ray.direction, a), c0 = isin::component(c.center, a);
+        const T n = (c0 - c.half - o) / d, f = (c0 + c.half - o) / d;
+        t0 = std::max(t0, std::min(n, f)), t1 = std::min(t1, std::max(n, f));
+    }
+    return t0 > T(0) && t0 <= t1 ? isin::Hit<T>::at(t0) : isin::Hit<T>::miss();
+}
+template <class T>
+isin::Box<T> bounds(const Cube<T>& c) noexcept {
+    isin::Box<T> b;
+    b.grow(c.center - isin::Vertex<T>{c.half, c.half, c.half}), b.grow(c.center + isin::Vertex<T>{c.half, c.half, c.half});
+    return b;
+}
+template <class T>
+isin::Vertex<T> surface_normal(const Cube<T>&, const isin::Vertex<T>&, const isin::Hit<T>&) noexcept {
+    return {0, 0, -1};
+}
+template <class T>
+constexpr const isin::Triangle<T>* triangle_of(const Cube<T>&) noexcept {
+    return nullptr;
+}
+
+} // namespace user
+
+namespace {
+
+template <class T>
+std::vector<isin::Ray<T>> view_rays(int w, int h) {
+    const isin::Camera<T> cam{w, h};
+    std::vector<isin::Ray<T>> rays;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) rays.push_back(cam.primary_ray(T(x) + T(0.37), T(y) + T(0.61)));
+    return rays;
+}
+
+} // namespace
+
+TEST_CASE_TEMPLATE("scene: spheres and a user's kind through their Bvh find what the plain loop finds", T, float, double) {
+    isin::Scene<T, isin::Sphere, user::Cube> scene;
+    std::mt19937_64 rng(2);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    isin::Material<T> glass;
+    glass.transparency = T(0.5);
+    const auto m = scene.add_material({}), g = scene.add_material(glass);
+    for (int i = 0; i < 3000; ++i)
+        scene.add(isin::Sphere<T>{{T(uni(rng) * 30), T(uni(rng) * 17), T(40 + uni(rng) * 20)}, T(0.3 + 0.2 * uni(rng))},
+                  i % 3 ? m : g);
+    for (int i = 0; i < 500; ++i)
+        scene.add(user::Cube<T>{{T(uni(rng) * 30), T(uni(rng) * 17), T(40 + uni(rng) * 20)}, T(0.4)}, i % 2 ? m : g);
+    scene.commit();
+    REQUIRE(scene.template has_bvh<isin::Sphere<T>>());
+    REQUIRE(scene.template has_bvh<user::Cube<T>>());
+    int hits = 0, differ = 0, shadow_differ = 0, partial = 0;
+    for (const auto& ray : view_rays<T>(80, 45)) {
+        scene.acceleration = isin::Acceleration::automatic;
+        const auto a = scene.intersect(ray);
+        const T ta = scene.transmittance(ray, T(100));
+        scene.acceleration = isin::Acceleration::none;
+        const auto b = scene.intersect(ray);
+        const T tb = scene.transmittance(ray, T(100));
+        hits += bool(b);
+        differ += bool(a) != bool(b) || (a && (a.t != b.t || a.geometry != b.geometry || a.primitive != b.primitive));
+        shadow_differ += std::fabs(double(ta) - double(tb)) > 1e-6; // the same factors, multiplied in another order
+        partial += tb > T(0) && tb < T(1);
+    }
+    CHECK(hits > 1000);
+    CHECK(differ == 0);
+    CHECK(shadow_differ == 0);
+    CHECK(partial > 20);
+}
+
+TEST_CASE_TEMPLATE("scene: shadow rays through a transparent mesh take its Bvh and multiply what the plain loop does", T,
+                   float, double) {
+    // Before, one transparent triangle sent the whole kind's shadow rays to the one-by-one loop.
+    const auto sphere = workloads::icosphere<T>({0, 0, 40}, 10.0, 3); // 1280 triangles, closed
+    isin::Material<T> glass;
+    glass.transparency = T(0.7);
+    isin::Scene<T, isin::Triangle> meshed, loose;
+    meshed.add_mesh(sphere, meshed.add_material(glass));
+    const auto m = loose.add_material(glass);
+    for (const auto& tri : sphere) loose.add(tri, m);
+    loose.acceleration = isin::Acceleration::none;
+    int through_two = 0, differ = 0;
+    for (const auto& ray : view_rays<T>(64, 36)) {
+        const T a = meshed.transmittance(ray, T(100)), b = loose.transmittance(ray, T(100));
+        differ += std::fabs(double(a) - double(b)) > 1e-6;
+        through_two += std::fabs(double(b) - 0.49) < 1e-6; // in and out of the glass sphere
+    }
+    CHECK(differ == 0);
+    CHECK(through_two > 200);
+}
+
+TEST_CASE_TEMPLATE("scene: placed meshes (rotated, scaled, mirrored, moved) hit as their moved triangles do", T, float,
+                   double) {
+    // 320 triangles around (0, 0, −50), behind the eye, where add_mesh places it; each placement
+    // first brings it to the origin.
+    const auto sphere = workloads::icosphere<T>({0, 0, -50}, 3.0, 2);
+    using X = isin::Transform<T>;
+    const X home = X::translation({0, 0, 50});
+    const std::vector<X> places = {X::translation({-10, 0, 40}) * home,
+                                   X::translation({0, 0, 45}) * X::rotation({1, 1, 0}, T(0.8)) * X::scaling({2, T(0.6), 1}) * home,
+                                   X::translation({10, 2, 40}) * X::scaling({-1, 1, 1}) * home, // mirrored
+                                   X::translation({3, -6, 35}) * X::scaling(T(0.5)) * home};
+    isin::Scene<T, isin::Triangle> placed, moved;
+    const auto m = placed.add_material({});
+    const auto id = placed.add_mesh(sphere, m);
+    for (const X& place : places) placed.add_instance(id, place);
+    placed.commit();
+    CHECK(placed.instance_count() == 5); // add_mesh's placement and 4 more
+    CHECK(placed.has_instance_bvh());
+    // The same triangles moved into the world, each placement a mesh of its own.
+    const auto mm = moved.add_material({});
+    for (const X& place : places) {
+        std::vector<isin::Triangle<T>> world;
+        for (const auto& tri : sphere) world.push_back({place.point(tri.v0), place.point(tri.v1), place.point(tri.v2)});
+        moved.add_mesh(world, mm);
+    }
+    moved.add_mesh(sphere, mm);
+    moved.commit();
+    int hits = 0, differ = 0, normal_differ = 0;
+    for (const auto& ray : view_rays<T>(96, 54)) {
+        const auto a = placed.intersect(ray), b = moved.intersect(ray);
+        hits += bool(b);
+        differ += bool(a) != bool(b) || (a && std::fabs(double(a.t) - double(b.t)) > 1e-4 * double(b.t));
+        // the mirrored copy's world triangles are wound the other way: its normals differ in sign
+        if (a && b) normal_differ += std::fabs(isin::dot(placed.surface(ray, a).normal, moved.surface(ray, b).normal)) < T(0.999);
+    }
+    CHECK(hits > 150);
+    CHECK(differ == 0);
+    CHECK(normal_differ == 0);
+    // Culling keeps each placement's outside, mirrored or not: the closed meshes look the same.
+    isin::RenderOptions opt;
+    opt.progress = false;
+    placed.add_light({{0, 50, 0}});
+    const isin::Camera<T> cam{96, 54};
+    const auto plain = isin::render(placed, cam, opt);
+    opt.culling = isin::Culling::dot_product;
+    CHECK(isin::render(placed, cam, opt).pixels() == plain.pixels());
+    CHECK_THROWS_AS(placed.add_instance(isin::MeshId{7}, X::identity()), std::out_of_range);
+    CHECK_THROWS_AS(placed.add_instance(id, X::scaling({1, 0, 1})), std::invalid_argument);
+}
+
+TEST_CASE("scene: a thousand placements of a mesh hold one mesh; twenty meshes cost twenty builds") {
+    const auto sphere = workloads::icosphere<float>({0, 0, 0}, 1.0, 3); // 1280 triangles
+    isin::Scene<float, isin::Sphere> scene;
+    const auto id = scene.add_mesh(sphere, scene.add_material({}));
+    const std::size_t one = scene.memory();
+    for (int i = 0; i < 1000; ++i)
+        scene.add_instance(id, isin::Transform<float>::translation({float(i % 40) * 3 - 60, float(i / 40) * 3 - 36, 100}));
+    scene.commit();
+    const std::size_t thousand = scene.memory();
+    CHECK(thousand < one + 1000 * 400); // a placement: two transforms, a box, its share of the placements' Bvh
+    CHECK(scene.intersect(isin::Ray<float>{{0, 0, 0}, {0, 0, 1}}));
+    // The mesh in 20 groups: the same hits as in one.
+    isin::Scene<float, isin::Sphere> one_mesh, groups;
+    one_mesh.add_mesh(sphere, one_mesh.add_material({}));
+    const auto m = groups.add_material({});
+    for (std::size_t g = 0; g < 20; ++g)
+        groups.add_mesh(std::vector<isin::Triangle<float>>(sphere.begin() + long(g * 64), sphere.begin() + long(g * 64 + 64)), m);
+    groups.commit();
+    int differ = 0;
+    for (const auto& ray : view_rays<float>(64, 36)) {
+        const isin::Ray<float> r{ray.origin - isin::Vertex<float>{0, 0, 5}, ray.direction};
+        const auto a = one_mesh.intersect(r), b = groups.intersect(r);
+        differ += bool(a) != bool(b) || (a && a.t != b.t);
+    }
+    CHECK(differ == 0);
+}
