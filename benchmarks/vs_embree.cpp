@@ -31,6 +31,7 @@
 #include <embree3/rtcore.h>
 
 #include "embree_scene.hpp"
+#include "embree_studies.hpp"
 #include <pmmintrin.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -70,6 +71,7 @@ struct Options {
     std::vector<int> threads = {1, 2};
     int width = 1920, height = 1080;
     std::string csv;
+    std::vector<std::string> studies = studies::names(); // after the meshes (embree_studies.hpp)
     bool build_only = false; // child mode: time the builds of one mesh with `build_threads`
     int build_threads = 1;
     std::string self;        // this program, re-executed for the build times
@@ -334,15 +336,18 @@ std::vector<int> parse_list(const char* s) {
 
 void usage(FILE* f) {
     std::fprintf(f,
-        "usage: vs_embree [--mesh NAME] [--repeats N] [--threads-list 1,2] [--width W] [--height H] [--csv FILE]\n"
+        "usage: vs_embree [--mesh NAME|none] [--repeats N] [--threads-list 1,2] [--width W] [--height H] [--csv FILE]\n"
+        "                 [--studies all|none|spheres,instances,transparency,refit,groups,memory]\n"
         "isin's Bvh<float> against Embree %d.%d.%d (RTC_BUILD_QUALITY_MEDIUM) on the same triangles and rays:\n"
         "build times (each thread count in a fresh child process), primary rays of the note's camera\n"
         "(isin intersect, rtcIntersect1, rtcIntersect16 on 4x4 tiles) and shadow rays (occluded,\n"
         "rtcOccluded1); medians of N runs (default 5). Meshes:",
         RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH);
     for (const auto& m : meshes::names()) std::fprintf(f, " %s", m.c_str());
-    std::fprintf(f, "\n--csv appends one row per mesh and thread count. Exit status 1 when the\n"
-                    "libraries' hit counts or sums of t differ by more than 1e-5 (relative).\n");
+    std::fprintf(f, "\n--csv appends one row per mesh and thread count. Then the scene studies of\n"
+                    "benchmarks/embree_studies.hpp (at half the width and height): spheres against Embree's points and\n"
+                    "user geometry, instances, transparent shadows, refit, a mesh in 20 groups, memory. Exit status 1\n"
+                    "when the libraries' hit counts or sums of t differ by more than 1e-5 (relative).\n");
 }
 
 int run(const Options& opt) {
@@ -366,6 +371,7 @@ int run(const Options& opt) {
                 "isin", "Embree", "isin", "E-1", "E-16", "isin/1", "rays", "isin", "E-1", "isin/1");
     bool all_ok = true;
     RTCDevice device = new_device(0);
+    rtcSetDeviceMemoryMonitorFunction(device, studies::embree_monitor, nullptr);
     for (const std::string& name : opt.meshes) {
         auto t0 = Clock::now();
         const std::vector<Tri> tris = meshes::make<float>(name);
@@ -444,6 +450,9 @@ int run(const Options& opt) {
         std::fflush(stdout);
         rtcReleaseScene(scene);
     }
+    studies::Config cfg;
+    cfg.width = std::max(2, opt.width / 2), cfg.height = std::max(2, opt.height / 2), cfg.repeats = opt.repeats;
+    all_ok = studies::run(device, cfg, opt.studies) && all_ok;
     rtcReleaseDevice(device);
     if (csv) std::fclose(csv);
     std::printf("%s\n", all_ok ? "all checks OK" : "MISMATCH between isin and Embree (see above)");
@@ -464,9 +473,23 @@ int main(int argc, char** argv) {
             if (a == "--help" || a == "-h") { usage(stdout); return 0; }
             else if (a == "--mesh") {
                 const std::string m = value();
-                if (std::find(meshes::names().begin(), meshes::names().end(), m) == meshes::names().end())
+                if (m == "none") opt.meshes.clear();
+                else if (std::find(meshes::names().begin(), meshes::names().end(), m) == meshes::names().end())
                     throw std::invalid_argument("unknown mesh '" + m + "'");
-                opt.meshes = {m};
+                else opt.meshes = {m};
+            }
+            else if (a == "--studies") {
+                const std::string list = value();
+                opt.studies.clear();
+                if (list == "all") opt.studies = studies::names();
+                for (std::size_t b = 0; list != "all" && list != "none" && b <= list.size();) {
+                    const std::size_t e = std::min(list.find(',', b), list.size());
+                    const std::string name = list.substr(b, e - b);
+                    if (std::find(studies::names().begin(), studies::names().end(), name) == studies::names().end())
+                        throw std::invalid_argument("unknown study '" + name + "'");
+                    opt.studies.push_back(name);
+                    b = e + 1;
+                }
             }
             else if (a == "--repeats") opt.repeats = std::max(1, std::atoi(value()));
             else if (a == "--threads-list") opt.threads = parse_list(value());

@@ -9,7 +9,9 @@
 
 #include "../vec.hpp"
 
-#if defined(__GNUC__) || defined(__clang__)
+// ISIN_FORCE_PURE: no vector extensions and no intrinsics anywhere in the Bvh (the portable
+// scalar forms, for compilers without them and to test those forms).
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(ISIN_FORCE_PURE)
 #define ISIN_VECTOR_EXTENSIONS 1
 #else
 #define ISIN_VECTOR_EXTENSIONS 0

@@ -18,8 +18,9 @@
 #include "box.hpp"
 #include "tree.hpp"
 
-#if defined(__AVX__)
+#if defined(__AVX__) && !defined(ISIN_FORCE_PURE)
 #include <immintrin.h>
+#define ISIN_DETAIL_SLABS_AVX 1
 #endif
 
 #if defined(__GNUC__) || defined(__clang__)
@@ -106,7 +107,7 @@ inline const T* plane(const Node& n, std::size_t offset) noexcept {
 // max/min takes the slab's value first: a NaN there yields the other operand.
 template <bool robust, class T>
 inline unsigned hit_children(const typename BvhTree<T>::Node& n, const SlabRay<T>& r, T t_far, T (&t_near)[8]) noexcept {
-#if defined(__AVX__)
+#if defined(ISIN_DETAIL_SLABS_AVX)
     if constexpr (sizeof(T) == sizeof(float)) { // 8 boxes in one 256-bit register per plane
         __m256 t0[3], t1[3]; // entry and exit distances of each axis' slab
         for (int a = 0; a < 3; ++a) {

@@ -141,7 +141,7 @@ template <bool cull, bool store = true, class T>
 #if defined(ISIN_DETAIL_TRIANGLES_AVX2)
     return test_block_avx2<cull, store>(b, r, t_max, out);
 #else
-#if ISIN_VECTOR_EXTENSIONS && !defined(ISIN_FORCE_PURE)
+#if ISIN_VECTOR_EXTENSIONS
     if constexpr (sizeof(T) == sizeof(float)) return test_block_lanes<cull>(b, r, t_max, out);
 #endif
     return test_block_scalar<cull>(b, r, t_max, out);
