@@ -82,14 +82,19 @@ template <class T, template <class> class... S>
     return culled;
 }
 
+namespace detail {
+[[noreturn]] ISIN_DETAIL_COLD inline void throw_too_deep(int depth) {
+    throw std::invalid_argument("isin::trace: depth " + std::to_string(depth) + " is beyond max_depth_limit");
+}
+} // namespace detail
+
 /// The colour seen along `ray` (unit direction): nearest hit (§5), Phong with shadows (§7, §9),
 /// reflection and transmission (§8) up to `max_depth`. `skip` culls objects (primary rays only).
 template <class T, template <class> class... S>
 [[nodiscard]] Color<T> trace(const Scene<T, S...>& scene, const Ray<T>& ray, int depth,
                              const RenderOptions& opt, RenderStats& stats,
                              const typename Scene<T, S...>::Culled* skip = nullptr) {
-    if (depth > RenderOptions::max_depth_limit) // render() checks opt.max_depth; this bounds direct calls too
-        throw std::invalid_argument("isin::trace: depth " + std::to_string(depth) + " is beyond max_depth_limit");
+    if (depth > RenderOptions::max_depth_limit) detail::throw_too_deep(depth); // render() checks opt.max_depth; this bounds direct calls too
     const Hit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
     if (!sh) return scene.background;
     const SurfacePoint<T> sp = scene.surface(ray, sh);

@@ -28,6 +28,7 @@
 #include "batch.hpp"
 #include "bvh.hpp"
 #include "color.hpp"
+#include "detail/attributes.hpp"
 #include "hit.hpp"
 #include "indexed_mesh.hpp"
 #include "ray.hpp"
@@ -164,6 +165,12 @@ struct InstanceId {
 };
 
 namespace detail {
+// The error of Scene::material and texture, kept out of line: they sit in every shading step.
+[[noreturn]] ISIN_DETAIL_COLD inline void throw_missing(const char* what, long long index, std::size_t count) {
+    throw std::out_of_range("isin::Scene: " + std::string(what) + " " + std::to_string(index) + " does not exist (" +
+                            std::to_string(count) + " " + what + "s)");
+}
+
 // What a scene keeps to speed up one kind: the Bvh (triangle kinds: a triangle Bvh; others: a
 // tree over the objects' boxes) or, for triangles of middling count, the batch. Immutable once
 // built: copies of the scene share them.
@@ -236,16 +243,12 @@ public:
     /// Material `index`; throws std::out_of_range if it does not exist (materials is public and
     /// may have changed since an object was added).
     [[nodiscard]] const Material<T>& material(std::uint32_t index) const {
-        if (index >= materials.size())
-            throw std::out_of_range("isin::Scene: material " + std::to_string(index) + " does not exist (" +
-                                    std::to_string(materials.size()) + " materials)");
+        if (index >= materials.size()) detail::throw_missing("material", index, materials.size());
         return materials[index];
     }
     /// Texture `index` (Material::texture); throws std::out_of_range if it does not exist.
     [[nodiscard]] const Texture<T>& texture(int index) const {
-        if (index < 0 || std::size_t(index) >= textures.size())
-            throw std::out_of_range("isin::Scene: texture " + std::to_string(index) + " does not exist (" +
-                                    std::to_string(textures.size()) + " textures)");
+        if (index < 0 || std::size_t(index) >= textures.size()) detail::throw_missing("texture", index, textures.size());
         return textures[std::size_t(index)];
     }
     /// Checks that every object's and mesh's materials and every material's texture (when ≥ 0)
@@ -435,18 +438,7 @@ public:
                 }
                 if (accel.batch && !mask && uses(Acceleration::batch, kind, vec.size())) return take(accel.batch->nearest(ray, t), kind);
             } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
-                traverse<Visit::nearest>(*accel.objects, ray, t, [&](std::uint32_t leaf, T&) {
-                    const auto& l = accel.objects->leaves()[leaf];
-                    for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
-                        const std::uint32_t i = accel.objects->primitives()[j];
-                        if (mask && mask[i]) continue;
-                        Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
-                        h.primitive = i;
-                        take(h, kind);
-                    }
-                    return false;
-                });
-                return;
+                return nearest_in_tree(*accel.objects, vec, kind, ray, mask, t, best);
             }
             for (std::size_t i = 0; i < vec.size(); ++i) {
                 if (mask && mask[i]) continue;
@@ -455,14 +447,7 @@ public:
                 take(h, kind);
             }
         });
-        const bool cull = culled && culled->mesh_backfaces;
-        for_each_instance(ray, t, [&](std::uint32_t i, T&) {
-            const Instance& inst = instances_[i];
-            HitFilter filter;
-            filter.cull_backfaces = cull; // in the mesh's own space: a mirrored copy keeps its outside
-            take(meshes_[inst.mesh].bvh->intersect(object_ray(inst, ray), t, filter), kinds + i);
-            return false;
-        });
+        if (!instances_.empty()) nearest_placement(ray, t, culled && culled->mesh_backfaces, best);
         return best;
     }
 
@@ -490,29 +475,14 @@ public:
                     return;
                 }
             } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
-                T t = t_max;
-                traverse<Visit::any>(*accel.objects, ray, t, [&](std::uint32_t leaf, T&) {
-                    const auto& l = accel.objects->leaves()[leaf];
-                    for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
-                        const std::uint32_t i = accel.objects->primitives()[j];
-                        if (intersect_primitive(ray, vec[i].shape, triangle_method).t < t_max && !pass(vec[i].material)) return true;
-                    }
-                    return false;
-                });
+                through *= tree_transmittance(*accel.objects, vec, ray, t_max);
                 return;
             }
             for (std::size_t i = 0; i < vec.size() && through > T(0); ++i)
                 if (intersect_primitive(ray, vec[i].shape, triangle_method).t < t_max) (void)pass(vec[i].material);
         });
         if (!(through > T(0))) return T(0);
-        T t = t_max;
-        for_each_instance(ray, t, [&](std::uint32_t i, T&) {
-            const Instance& inst = instances_[i];
-            const MeshEntry& m = meshes_[inst.mesh];
-            return m.bvh->for_each_hit(object_ray(inst, ray), t_max, [&](std::uint32_t tri, const Hit<T>&) {
-                return pass(m.material + (m.mesh->material.empty() ? 0 : m.mesh->material[tri]));
-            });
-        });
+        if (!instances_.empty()) through *= placements_transmittance(ray, t_max);
         return through > T(0) ? through : T(0);
     }
 
@@ -564,6 +534,68 @@ private:
         bool identity = true;
         Box<T> box; // in the world
     };
+
+    // The nearest hit among the objects `vec` of kind `kind` through their Bvh, nearer than t
+    // (which it lowers), into `best`.
+    template <class Objects>
+    void nearest_in_tree(const BvhTree<T>& tree, const Objects& vec, std::size_t kind, const Ray<T>& ray,
+                                              const std::uint8_t* mask, T& t, Hit<T>& best) const {
+        traverse<Visit::nearest>(tree, ray, t, [&](std::uint32_t leaf, T&) {
+            const auto& l = tree.leaves()[leaf];
+            for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
+                const std::uint32_t i = tree.primitives()[j];
+                if (mask && mask[i]) continue;
+                const Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
+                if (!(h.t < t)) continue;
+                t = h.t, best = h;
+                best.primitive = i, best.geometry = static_cast<std::uint32_t>(kind);
+            }
+            return false;
+        });
+    }
+
+    // The fraction of light that gets through the objects `vec` up to t_max, through their Bvh.
+    template <class Objects>
+    T tree_transmittance(const BvhTree<T>& tree, const Objects& vec, const Ray<T>& ray, T t_max) const {
+        T through = T(1), t = t_max;
+        traverse<Visit::any>(tree, ray, t, [&](std::uint32_t leaf, T&) {
+            const auto& l = tree.leaves()[leaf];
+            for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
+                const std::uint32_t i = tree.primitives()[j];
+                if (!(intersect_primitive(ray, vec[i].shape, triangle_method).t < t_max)) continue;
+                through *= material(vec[i].material).transparency;
+                if (!(through > T(0))) return true;
+            }
+            return false;
+        });
+        return through;
+    }
+
+    // The nearest hit in a placed mesh nearer than t (which it lowers), into `best`.
+    void nearest_placement(const Ray<T>& ray, T& t, bool cull, Hit<T>& best) const noexcept {
+        for_each_instance(ray, t, [&](std::uint32_t i, T&) {
+            const Instance& inst = instances_[i];
+            HitFilter filter;
+            filter.cull_backfaces = cull; // in the mesh's own space: a mirrored copy keeps its outside
+            const Hit<T> h = meshes_[inst.mesh].bvh->intersect(object_ray(inst, ray), t, filter);
+            if (h.t < t) t = h.t, best = h, best.geometry = static_cast<std::uint32_t>(kinds + i);
+            return false;
+        });
+    }
+
+    // The fraction of light that gets through the placed meshes up to t_max.
+    T placements_transmittance(const Ray<T>& ray, T t_max) const {
+        T through = T(1), t = t_max;
+        for_each_instance(ray, t, [&](std::uint32_t i, T&) {
+            const Instance& inst = instances_[i];
+            const MeshEntry& m = meshes_[inst.mesh];
+            return m.bvh->for_each_hit(object_ray(inst, ray), t_max, [&](std::uint32_t tri, const Hit<T>&) {
+                through *= material(m.material + (m.mesh->material.empty() ? 0 : m.mesh->material[tri])).transparency;
+                return through > T(0);
+            });
+        });
+        return through;
+    }
 
     // Whether kind `kind` of n objects is tested with acceleration `a`.
     [[nodiscard]] bool uses(Acceleration a, std::size_t kind, std::size_t n) const noexcept {

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <limits>
 
+#include "../detail/attributes.hpp"
 #include "../ray.hpp"
 #include "box.hpp"
 #include "tree.hpp"
@@ -21,12 +22,6 @@
 #if defined(__AVX__) && !defined(ISIN_FORCE_PURE)
 #include <immintrin.h>
 #define ISIN_DETAIL_SLABS_AVX 1
-#endif
-
-#if defined(__GNUC__) || defined(__clang__)
-#define ISIN_DETAIL_INLINE inline __attribute__((always_inline)) // measured: the per-ray set-up must not be a call
-#else
-#define ISIN_DETAIL_INLINE inline
 #endif
 
 namespace isin {

@@ -9,13 +9,9 @@
 #include <cstdint>
 #include <limits>
 
-#define ISIN_DETAIL_TRIANGLES_AVX2 1
+#include "../detail/attributes.hpp"
 
-#if defined(__GNUC__) || defined(__clang__)
-#define ISIN_DETAIL_COLD __attribute__((noinline, cold)) // a rare path kept out of the hot loop
-#else
-#define ISIN_DETAIL_COLD
-#endif
+#define ISIN_DETAIL_TRIANGLES_AVX2 1
 
 namespace isin {
 namespace detail {

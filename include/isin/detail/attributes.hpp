@@ -1,0 +1,12 @@
+#pragma once
+/// isin — private: function attributes, where the compiler has them.
+///  - ISIN_DETAIL_COLD: a rare path (an error, a fallback) kept out of line, so that the hot
+///    loop around it stays small.
+///  - ISIN_DETAIL_INLINE: a small function that must be inlined (measured: a call costs).
+#if defined(__GNUC__) || defined(__clang__)
+#define ISIN_DETAIL_COLD __attribute__((noinline, cold))
+#define ISIN_DETAIL_INLINE inline __attribute__((always_inline))
+#else
+#define ISIN_DETAIL_COLD
+#define ISIN_DETAIL_INLINE inline
+#endif
