@@ -16,7 +16,7 @@
 
 #include "batch_kernels.hpp"
 #include "methods.hpp"
-#include "workloads.hpp"
+#include "../tests/common/workloads.hpp"
 
 
 namespace {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "batch_kernels.hpp"
-#include "workloads.hpp"
+#include "../tests/common/workloads.hpp"
 
 namespace {
 

@@ -12,7 +12,7 @@
 //   random_soup(n)       n small triangles scattered through the view, z ∈ [25, 65]
 #include <isin/isin.hpp>
 
-#include "workloads.hpp"
+#include "../tests/common/workloads.hpp"
 
 #include <cmath>
 #include <cstddef>

@@ -1,6 +1,6 @@
 // Renders a mesh (Wavefront OBJ or PLY) with the note's Phong shading and shadows, on a
 // checkerboard floor, the camera framed automatically; optional backface culling (§11).
-// Build: c++ -std=c++17 -O2 -pthread -I include examples/mesh_view.cpp -o mesh_view
+// Build: c++ -std=c++17 -O2 -DISIN_IMPLEMENTATION -I include examples/mesh_view.cpp -o mesh_view
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -1,6 +1,6 @@
 // Renders the note's scene — triangles U, Y, Z of example 5a, a mirror sphere, a glass sphere, a
 // checkerboard floor, two lights with shadows — to a PNG (or PPM).
-// Build: c++ -std=c++17 -O2 -pthread -I include examples/notes_scene.cpp -o notes_scene
+// Build: c++ -std=c++17 -O2 -DISIN_IMPLEMENTATION -I include examples/notes_scene.cpp -o notes_scene
 #include <cstdio>
 #include <exception>
 

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include <isin/image.hpp>
+#include <isin/image_io.hpp>
 
 namespace example {
 

@@ -1,6 +1,6 @@
 // Renders the note's scene twice — triangles by the area test (§4) and by Möller–Trumbore (§10) —
 // side by side into one image, and prints how many pixels differ.
-// Build: c++ -std=c++17 -O2 -pthread -I include examples/triangle_methods.cpp -o triangle_methods
+// Build: c++ -std=c++17 -O2 -DISIN_IMPLEMENTATION -I include examples/triangle_methods.cpp -o triangle_methods
 #include <cstdio>
 #include <cstdlib>
 #include <exception>

@@ -2,7 +2,7 @@
 // I/K look up and down, P saves the view as PNG, Q quits. 24-bit colour, two pixels per
 // character cell (upper half block), sized to the terminal; a coarse frame first while moving,
 // full resolution when the camera stops. Headless: --script KEYS replays keys and writes PNGs.
-// Build: c++ -std=c++17 -O2 -pthread -I include examples/walk.cpp -o walk
+// Build: c++ -std=c++17 -O2 -DISIN_IMPLEMENTATION -I include examples/walk.cpp -o walk
 #include <algorithm>
 #include <atomic>
 #include <chrono>

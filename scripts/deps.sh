@@ -2,7 +2,7 @@
 # Installs the Debian packages isin's build, tests and examples need, if any are missing.
 # Usage: scripts/deps.sh [extra packages…]   (uses sudo when not run as root)
 set -euo pipefail
-packages=(g++ clang libclang-rt-14-dev cmake make doctest-dev libstb-dev libtinyobjloader-dev "$@")
+packages=(g++ clang libclang-rt-14-dev cmake make pkg-config doctest-dev libstb-dev libtinyobjloader-dev "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

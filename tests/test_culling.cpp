@@ -6,7 +6,7 @@
 #include <doctest/doctest.h>
 
 #include "approx.hpp"
-#include "../benchmarks/workloads.hpp"
+#include "common/workloads.hpp"
 
 #include <array>
 #include <cmath>

@@ -131,7 +131,6 @@ std::string header(std::initializer_list<const char*> lines) {
 
 } // namespace
 
-#if ISIN_HAVE_TINYOBJLOADER
 TEST_CASE_TEMPLATE("OBJ: quad, triangle, pentagon become fans (v0, vi, vi+1) with exact coordinates", T,
                    float, double) {
     TempDir dir{"isin-test-mesh-"};
@@ -191,22 +190,11 @@ TEST_CASE("OBJ: a face may name vertices defined later in the file; CRLF line en
     check_triangle(tris[0], V<double>(0, 0, 0), V<double>(1, 0, 0), V<double>(0, 1, 0));
 }
 
-#else
-TEST_CASE("OBJ without tinyobjloader: load_obj and load_mesh throw runtime_error saying what to install") {
-    TempDir dir{"isin-test-mesh-"};
-    const std::string obj = dir.put("a.obj", polygons_obj);
-    CHECK_THROWS_WITH_AS((void)isin::load_obj<float>(obj), doctest::Contains("libtinyobjloader-dev"),
-                         std::runtime_error);
-    CHECK_THROWS_WITH_AS((void)isin::load_mesh<double>(obj), doctest::Contains(str(obj)), std::runtime_error);
-}
-#endif
 
 TEST_CASE("OBJ and PLY without faces give an empty mesh, not an error") {
     TempDir dir{"isin-test-mesh-"};
-#if ISIN_HAVE_TINYOBJLOADER
     CHECK(isin::load_obj<float>(dir.put("empty.obj", "")).empty());
     CHECK(isin::load_obj<float>(dir.put("points.obj", "# only vertices\nv 0 0 0\nv 1 1 1\n")).empty());
-#endif
     CHECK(isin::load_ply<float>(dir.put("points.ply", header({"ply", "format ascii 1.0", "element vertex 1",
                                                              "property float x", "property float y",
                                                              "property float z"}) +
@@ -285,12 +273,10 @@ TEST_CASE_TEMPLATE("PLY binary: double and int16 coordinates, uint indices, a 20
 
 TEST_CASE("load_mesh: chooses the reader by extension, in any letter case") {
     TempDir dir{"isin-test-mesh-"};
-#if ISIN_HAVE_TINYOBJLOADER
     CHECK(isin::load_mesh<float>(dir.put("a.obj", polygons_obj)).size() == 7);
     CHECK(isin::load_mesh<double>(dir.put("B.OBJ", polygons_obj)).size() == 7);
     // The content must match the extension: a PLY named .obj is read as OBJ (no faces there).
     CHECK(isin::load_mesh<float>(dir.put("e.obj", ascii_ply)).empty());
-#endif
     CHECK(isin::load_mesh<float>(dir.put("c.ply", ascii_ply)).size() == 3);
     CHECK(isin::load_mesh<double>(dir.put("D.PlY", ascii_ply)).size() == 3);
     const std::string stl = dir.put("f.stl", "solid x\n");
@@ -307,16 +293,13 @@ TEST_CASE("missing or unreadable files throw MeshError naming the path") {
     CHECK(str(a) == doctest::Contains("cannot open"));
     const std::string d = thrown([&] { (void)isin::load_ply<double>(dir.path.string()); }); // a directory
     CHECK(str(d) == doctest::Contains(str(dir.path.string())));
-#if ISIN_HAVE_TINYOBJLOADER
     const std::string obj = (dir.path / "nothing.obj").string();
     CHECK(str(thrown([&] { (void)isin::load_obj<double>(obj); })) == doctest::Contains(str(obj)));
     CHECK(str(thrown([&] { (void)isin::load_obj<float>(dir.path.string()); })) ==
           doctest::Contains(str(dir.path.string())));
-#endif
     static_assert(std::is_base_of_v<std::runtime_error, isin::MeshError>);
 }
 
-#if ISIN_HAVE_TINYOBJLOADER
 TEST_CASE("OBJ: an index out of range names the file and the face's line") {
     TempDir dir{"isin-test-mesh-"};
     const std::string base = "v 0 0 0\nv 1 0 0\n# a comment\nv 0 1 0\n";
@@ -394,11 +377,9 @@ TEST_CASE_TEMPLATE("OBJ: numbers tinyobjloader's arithmetic gets wrong are rerea
     check_triangle(tris[0], V<T>(0, 1, 2), V<T>(1, 0, 0), V<T>(0, 1, 0));
 }
 
-#endif
 
 TEST_CASE("OBJ and PLY: 1e300 does not fit a float (line named) but loads as a double") {
     TempDir dir{"isin-test-mesh-"};
-#if ISIN_HAVE_TINYOBJLOADER
     const std::string obj = dir.put("big.obj", "v 0 0 0\nv 1 0 0\nv 1e300 1 0\nf 1 2 3\n");
     const std::string why = thrown([&] { (void)isin::load_obj<float>(obj); });
     CHECK(str(why) == doctest::Contains("line 3"));
@@ -406,7 +387,6 @@ TEST_CASE("OBJ and PLY: 1e300 does not fit a float (line named) but loads as a d
     const auto tris = isin::load_obj<double>(obj);
     REQUIRE(tris.size() == 1);
     CHECK(tris[0].v2.x == doctest::Approx(1e300));
-#endif
 
     const std::string ply = dir.put("big.ply", header({"ply", "format ascii 1.0", "element vertex 3",
                                                        "property double x", "property double y",
@@ -574,7 +554,6 @@ TEST_CASE("PLY: NaN coordinates, short faces and malformed numbers throw with th
 
 // ---- hardening -----------------------------------------------------------------------------------
 
-#if ISIN_HAVE_TINYOBJLOADER
 TEST_CASE("OBJ: exponents tinyobjloader's guard lets overflow are refused, on v, vn and vt lines (D8)") {
     // Its exponent accumulates in an int guarded one step too late: "1e-2147483648" overflowed
     // it (undefined behaviour). isin took the number (it underflows to 0) and did not look at
@@ -599,7 +578,6 @@ TEST_CASE("OBJ: exponents tinyobjloader's guard lets overflow are refused, on v,
     REQUIRE(tris.size() == 1);
     CHECK(tris[0].v0.z == 0.0f);
 }
-#endif
 
 TEST_CASE_TEMPLATE("load_mesh_from_memory reads what load_mesh reads, naming its source in errors", T, float, double) {
     TempDir dir{"isin-test-mesh-"};
@@ -610,13 +588,11 @@ TEST_CASE_TEMPLATE("load_mesh_from_memory reads what load_mesh reads, naming its
     const auto from_memory = isin::load_mesh_from_memory<T>(ply.data(), ply.size(), isin::MeshFormat::ply);
     REQUIRE(from_memory.size() == 1);
     CHECK(from_memory[0].v1.x == from_file[0].v1.x);
-#if ISIN_HAVE_TINYOBJLOADER
     const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\n";
     CHECK(isin::load_mesh_from_memory<T>(obj.data(), obj.size(), isin::MeshFormat::obj).size() == 2);
     const std::string bad = "v 0 0 0\nf 1 2 3\n";
     CHECK(str(thrown([&] { (void)isin::load_mesh_from_memory<T>(bad.data(), bad.size(), isin::MeshFormat::obj, "socket 7"); })) ==
           doctest::Contains("'socket 7': line 2"));
-#endif
     CHECK(str(thrown([&] { (void)isin::load_mesh_from_memory<T>(nullptr, 10, isin::MeshFormat::ply); })) ==
           doctest::Contains("not a PLY file"));
 }

@@ -5,7 +5,7 @@
 
 #include "approx.hpp"
 #include "../examples/note_scene.hpp"
-#include "../benchmarks/workloads.hpp"
+#include "common/workloads.hpp"
 
 #include <cmath>
 #include <cstdlib>

@@ -5,7 +5,7 @@
 #include <doctest/doctest.h>
 
 #include "approx.hpp"
-#include "../benchmarks/workloads.hpp"
+#include "common/workloads.hpp"
 
 #include <cmath>
 #include <random>

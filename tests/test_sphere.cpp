@@ -124,3 +124,27 @@ TEST_CASE_TEMPLATE("bad input: zero/negative/NaN radius, NaN/inf rays, zero dire
     // An infinite radius is not a sphere either: no finite hit.
     CHECK_FALSE(isin::intersect(ok, isin::Sphere<T>{{0, 0, 50}, inf}));
 }
+
+TEST_CASE_TEMPLATE("the comparison tests: textbook quadratic and Ray Tracing Gems ch. 7 give §6's answers", T, float,
+                   double) {
+    const isin::Sphere<T> sp{{0, 0, 50}, 5};
+    const isin::Ray<T> ahead{{0, 0, 0}, {0, 0, 1}}, inside{{0, 0, 50}, {0, 0, 1}}, aside{{10, 0, 0}, {0, 0, 1}},
+        behind{{0, 0, 60}, {0, 0, 1}}, scaled{{0, 0, 0}, {0, 0, 2}};
+    for (const auto& test : {&isin::intersect_quadratic<T>, &isin::intersect_rtg<T>}) {
+        CHECK(test(ahead, sp).t == approx(45));   // §6: outside → s − q
+        CHECK(test(inside, sp).t == approx(5));   // §6: inside → s + q
+        CHECK_FALSE(test(aside, sp));             // §6: m2 > r2
+        CHECK_FALSE(test(behind, sp));            // §6: behind
+        CHECK(test(scaled, sp).t == approx(22.5)); // t in multiples of |Rd|
+        CHECK_FALSE(test(ahead, isin::Sphere<T>{{0, 0, 50}, 0}));
+        CHECK_FALSE(test(isin::Ray<T>{{0, 0, 0}, {0, 0, 0}}, sp));
+    }
+    // Far from the centre of a small sphere, the quadratic's discriminant cancels where the RTG
+    // form (and isin's) does not: a ray 0.999 r from the centre of r = 1e-3 at 1e4 away in float.
+    if constexpr (sizeof(T) == sizeof(float)) {
+        const isin::Sphere<T> small{{0, 0, T(1e4)}, T(1e-3)};
+        const isin::Ray<T> grazing{{T(0.999e-3), 0, 0}, {0, 0, 1}};
+        CHECK(isin::intersect_rtg(grazing, small));
+        CHECK(isin::intersect(grazing, small));
+    }
+}

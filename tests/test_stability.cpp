@@ -7,7 +7,7 @@
 
 #include <doctest/doctest.h>
 
-#include "../benchmarks/workloads.hpp"
+#include "common/workloads.hpp"
 #include "approx.hpp"
 
 #include <cmath>

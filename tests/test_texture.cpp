@@ -1,9 +1,11 @@
 // Note §10: texel coordinates on a rectangle's two triangles; checkerboard and image textures.
+#include <isin/image_io.hpp>
 #include <isin/texture.hpp>
 
 #include <doctest/doctest.h>
 
 #include "approx.hpp"
+#include "temp_dir.hpp"
 
 #include <filesystem>
 #include <limits>
@@ -134,15 +136,12 @@ TEST_CASE_TEMPLATE("Texture variant: sample() dispatches to whichever texture it
 }
 
 TEST_CASE_TEMPLATE("ImageTexture::load reads a file; a missing file throws naming it", T, float, double) {
-    namespace fs = std::filesystem;
-    const fs::path dir = fs::temp_directory_path() /
-                         ("isin-test-texture-" + std::to_string(isin::detail::process_id()));
-    fs::create_directories(dir);
-    const std::string path = (dir / "quad.ppm").string();
+    TempDir dir{"isin-test-texture-"};
+    const std::string path = dir / "quad.ppm";
     isin::write_ppm(quad(), path);
     const auto tex = isin::ImageTexture<T>::load(path);
     check_color(tex.sample(T(0.25), T(0.75), isin::Filter::nearest), 0, 0, 1);
-    const std::string missing = (dir / "missing.png").string();
+    const std::string missing = dir / "missing.png";
     std::string message;
     try {
         (void)isin::ImageTexture<T>::load(missing);
@@ -150,5 +149,4 @@ TEST_CASE_TEMPLATE("ImageTexture::load reads a file; a missing file throws namin
         message = e.what();
     }
     CHECK(message.find(missing) != std::string::npos);
-    fs::remove_all(dir);
 }

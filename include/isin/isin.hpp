@@ -18,6 +18,11 @@
 ///     scene.add_light({{0, 40, 0}});
 ///     isin::write_png(isin::render(scene, cam), "out.png");     // §7 Phong, §9 shadows, §8
 ///
+/// Files (image_io.hpp, mesh.hpp) are compiled once: in exactly one .cpp of the program write
+///     #define ISIN_IMPLEMENTATION
+///     #include <isin/isin.hpp>
+/// (stb and tinyobjloader are compiled there), or link CMake's isin::io.
+///
 /// Headers, one concept each: vec (§2), ray (§3), hit, camera (§3), triangle (§4, §10),
 /// sphere (§6), color, shading (§7, §8), offset (§9), culling (§11), texture (§10), image,
 /// mesh (OBJ/PLY files), scene (§5), render (§3–§11).
@@ -29,6 +34,7 @@
 #include "culling.hpp"
 #include "hit.hpp"
 #include "image.hpp"
+#include "image_io.hpp"
 #include "indexed_mesh.hpp"
 #include "mesh.hpp"
 #include "offset.hpp"

@@ -17,6 +17,7 @@
 
 #include "color.hpp"
 #include "image.hpp"
+#include "image_io.hpp"
 
 namespace isin {
 

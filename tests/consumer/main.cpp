@@ -1,9 +1,10 @@
 // A user's program: includes the umbrella header and nothing else of isin's; follows the README.
+// Its file code comes from isin::io (CMake), isin-io (pkg-config) or -DISIN_IMPLEMENTATION.
 #include <isin/isin.hpp>
 
 #include <cstdio>
 
-int main() {
+int main(int argc, char** argv) {
     const isin::Camera<float> cam{32, 18};
     const isin::Triangle<float> blue{{-30, 0, 37}, {30, 40, 117}, {30, -40, 117}};
     const auto hit = isin::intersect_moller_trumbore(cam.primary_ray(15.5f, 8.5f), blue);
@@ -23,5 +24,9 @@ int main() {
     for (const auto& p : image.pixels()) red_pixels += p.r > 0 && p.g == 0 && p.b == 0;
     std::printf("centre pixel (%d, %d, %d), %d red pixels\n", centre.r, centre.g, centre.b, red_pixels);
     const bool sphere = centre.r > 0 && centre.r == centre.g && centre.g == centre.b;
+    if (argc > 1) { // the file code: write and read back
+        isin::write_image(image, argv[1]);
+        if (isin::read_image(argv[1]).pixels() != image.pixels()) return 1;
+    }
     return hit && hit.t > 76.9f && hit.t < 77.1f && sphere && red_pixels > 20 ? 0 : 1;
 }

@@ -2,7 +2,8 @@
 // PPM) with the default limits. A std::runtime_error is the defined answer to bad data; any
 // other exception, a crash, a sanitizer report, a hang or an allocation beyond libFuzzer's
 // limits is a finding.
-#include <isin/image.hpp>
+#define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
+#include <isin/image_io.hpp>
 
 #include <cstddef>
 #include <cstdint>

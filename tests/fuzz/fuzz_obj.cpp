@@ -1,6 +1,7 @@
 // libFuzzer target: the OBJ reader (isin's checks, then tinyobjloader) through
 // isin::load_mesh_from_memory in float and double. isin::MeshError is the defined answer to bad
 // data; anything else is a finding.
+#define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
 #include <isin/mesh.hpp>
 
 #include <cstddef>

@@ -1,5 +1,6 @@
 // libFuzzer target: the PLY reader (isin::load_mesh_from_memory, MeshFormat::ply) in float and
 // double. isin::MeshError is the defined answer to bad data; anything else is a finding.
+#define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
 #include <isin/mesh.hpp>
 
 #include <cstddef>

@@ -2,7 +2,8 @@
 // readers take, small, so that libFuzzer starts from deep inside each format.
 //   make_seeds DIR   →   DIR/image (PNG of every colour type and depth, interlaced or not, JPEG,
 //                        PPM), DIR/ply (ASCII and binary, every property type), DIR/obj
-#include <isin/image.hpp>
+#define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
+#include <isin/image_io.hpp>
 
 #include <cstdint>
 #include <cstdio>

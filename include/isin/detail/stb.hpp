@@ -3,11 +3,13 @@
 ///
 /// stb is not copied into isin; this header only includes the system's copy (Debian/Ubuntu:
 /// `apt install libstb-dev`, headers in /usr/include/stb/; other layouts: <stb_image.h> on the
-/// include path). It sets ISIN_HAVE_STB to 1 when both headers are usable, else to 0; with 0 the
-/// rest of isin still compiles and the PNG/JPEG functions throw std::runtime_error at run time.
+/// include path). Only the implementation of image_io.hpp includes it (ISIN_IMPLEMENTATION or
+/// isin::io). Without the headers that is a compile-time error naming the package, unless
+/// ISIN_HAVE_STB is defined to 0: then PPM works and the PNG/JPEG functions throw
+/// std::runtime_error saying isin was built without stb.
 ///
 /// Linkage, so that a header-only library cannot clash with anybody's stb:
-///  - Normally isin compiles stb's implementation into each translation unit as `static`
+///  - Normally isin compiles stb's implementation into its implementation's translation unit as `static`
 ///    functions (STB_IMAGE_STATIC, STB_IMAGE_WRITE_STATIC), reduced to what isin needs
 ///    (STBI_ONLY_PNG, STBI_ONLY_JPEG, STBI_NO_STDIO, STBI_WRITE_NO_STDIO: isin does its own file
 ///    I/O). No external symbol is defined, so nothing clashes with a user's stb at link time.
@@ -54,7 +56,7 @@
 #if ISIN_DETAIL_STB_IMAGE != 0 && ISIN_DETAIL_STB_IMAGE_WRITE != 0
 #define ISIN_HAVE_STB 1
 #else
-#define ISIN_HAVE_STB 0
+#error "isin: PNG and JPEG files need the stb headers: install Debian/Ubuntu's libstb-dev (stb_image.h, stb_image_write.h), or define ISIN_HAVE_STB to 0 to build with PPM files only"
 #endif
 #endif
 

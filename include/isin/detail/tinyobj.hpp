@@ -3,11 +3,12 @@
 ///
 /// tinyobjloader is not copied into isin; this header only includes the system's copy
 /// (Debian/Ubuntu: `apt install libtinyobjloader-dev`, header /usr/include/tiny_obj_loader.h).
-/// It sets ISIN_HAVE_TINYOBJLOADER to 1 when the header is usable, else to 0; with 0 the rest of
-/// isin still compiles and isin::load_obj throws std::runtime_error at run time.
+/// Only the implementation of mesh.hpp includes it (ISIN_IMPLEMENTATION or isin::io). Without the
+/// header that is a compile-time error naming the package, unless ISIN_HAVE_TINYOBJLOADER is
+/// defined to 0: then PLY works and isin::load_obj throws std::runtime_error saying so.
 ///
 /// Linkage, so that a header-only library cannot clash with anybody's tinyobjloader:
-///  - Normally isin compiles tinyobjloader's implementation into each translation unit inside
+///  - Normally isin compiles tinyobjloader's implementation into its implementation's translation unit inside
 ///    `isin::detail::<anonymous namespace>`: every symbol has internal linkage, so nothing
 ///    clashes at link time with another translation unit, with a user's own copy of the
 ///    implementation, or with the system's libtinyobjloader.so. This private copy stores reals
@@ -48,10 +49,9 @@
 #if ISIN_DETAIL_TINYOBJ != 0
 #define ISIN_HAVE_TINYOBJLOADER 1
 #else
-#define ISIN_HAVE_TINYOBJLOADER 0
+#error "isin: OBJ files need tinyobjloader: install Debian/Ubuntu's libtinyobjloader-dev (tiny_obj_loader.h), or define ISIN_HAVE_TINYOBJLOADER to 0 to build with PLY files only"
 #endif
 #endif
-
 #if ISIN_HAVE_TINYOBJLOADER && ISIN_DETAIL_TINYOBJ == 2
 
 // Every standard header tiny_obj_loader.h includes (or relies on) comes first, at global scope:
