@@ -1,6 +1,8 @@
 #pragma once
 // Command-line parsing shared by the examples: option values checked with a clear message and
-// exit status 2, and the common --width, --height, --output, --threads, --samples, --help.
+// exit status 2, and the common --width, --height, --output, --threads, --samples, --help, and
+// the pieces a job scheduler can run apart: --tile I/N (a band of rows) and --frames A..B (frames
+// of a camera path).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -8,6 +10,7 @@
 #include <string>
 
 #include <isin/image_io.hpp>
+#include <isin/render.hpp>
 
 namespace example {
 
@@ -51,32 +54,125 @@ inline void check_output(const char* program, const std::string& path, int width
     }
 }
 
+/// --tile I/N: band I (from 0) of N bands of rows (isin::row_band); N = 1 is the whole image.
+struct Tile {
+    int index = 0, count = 1;
+    [[nodiscard]] bool whole() const { return count == 1; }
+};
+
+/// Parses "I/N" with 1 ≤ N ≤ height and 0 ≤ I < N; fails (status 2) otherwise.
+inline Tile to_tile(const std::string& text, int height, const char* program, const char* usage) {
+    const std::size_t slash = text.find('/');
+    if (slash == std::string::npos) fail(program, "--tile takes I/N (band I of N, from 0), got '" + text + "'", usage);
+    const int count = to_integer(text.substr(slash + 1), "--tile's N", 1, height, program, usage);
+    return {to_integer(text.substr(0, slash), "--tile's I", 0, count - 1, program, usage), count};
+}
+
+/// --frames A..B: frames A to B (inclusive, from 0) of an example's camera path.
+struct FrameRange {
+    int first = 0, last = -1;
+    [[nodiscard]] bool given() const { return last >= first; }
+};
+
+/// Whether `text` has the form of a frame range: digits, "..", digits (so "../frames" is not one).
+inline bool is_frame_range(const std::string& text) {
+    const std::size_t dots = text.find("..");
+    const auto digits = [&](std::size_t from, std::size_t to) {
+        if (from >= to) return false;
+        for (std::size_t k = from; k < to; ++k)
+            if (text[k] < '0' || text[k] > '9') return false;
+        return true;
+    };
+    return dots != std::string::npos && digits(0, dots) && digits(dots + 2, text.size());
+}
+
+/// Parses "A..B" with 0 ≤ A ≤ B ≤ max_frame; fails (status 2) otherwise.
+inline FrameRange to_frame_range(const std::string& text, int max_frame, const char* program, const char* usage) {
+    const std::size_t dots = text.find("..");
+    if (dots == std::string::npos) fail(program, "--frames takes A..B, got '" + text + "'", usage);
+    const int first = to_integer(text.substr(0, dots), "--frames' A", 0, max_frame, program, usage);
+    return {first, to_integer(text.substr(dots + 2), "--frames' B", first, max_frame, program, usage)};
+}
+
+/// The file of frame `frame` for the output `pattern`: its "%d" or "%0Nd" (N a digit) replaced by
+/// the number, or, without one, "_NNNN" (four digits at least) put before the extension.
+inline std::string frame_path(const std::string& pattern, int frame) {
+    char number[32];
+    const std::size_t percent = pattern.find('%');
+    if (percent != std::string::npos) {
+        std::size_t end = percent + 1;
+        int digits = 1;
+        if (end + 1 < pattern.size() && pattern[end] == '0' && pattern[end + 1] >= '1' && pattern[end + 1] <= '9')
+            digits = pattern[end + 1] - '0', end += 2;
+        if (end < pattern.size() && pattern[end] == 'd') {
+            std::snprintf(number, sizeof number, "%0*d", digits, frame);
+            return pattern.substr(0, percent) + number + pattern.substr(end + 1);
+        }
+    }
+    std::snprintf(number, sizeof number, "_%04d", frame);
+    const std::size_t slash = pattern.find_last_of('/'), dot = pattern.find_last_of('.');
+    const std::size_t at = dot != std::string::npos && (slash == std::string::npos || dot > slash) ? dot : pattern.size();
+    return pattern.substr(0, at) + number + pattern.substr(at);
+}
+
 struct Options {
     int width = 800, height = 450, threads = 0, samples = 1;
     std::string output;
+    std::string tile_text, frames_text; // read once the height is known (options come in any order)
+    Tile tile;
+    FrameRange frames;
 };
 
-/// Parses --width, --height, --threads, --samples, --output and --help; `usage` is printed for
-/// --help (to stdout, status 0) and on errors (stderr, status 2). The output must take an image
-/// `width_factor`·width × height (check_output).
-inline Options parse(int argc, char** argv, const char* usage, const std::string& default_output,
+/// Reads option argv[i] into `o` if it is one of the common ones (--width, --height, --threads,
+/// --samples, --output, --help, and with `pieces` --tile and --frames); returns false for any
+/// other.
+inline bool common_option(int& i, int argc, char** argv, Options& o, const char* usage, bool pieces = true) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+        std::fputs(usage, stdout);
+        std::exit(0);
+    } else if (a == "--width") o.width = integer_option(i, argc, argv, 2, 32768, usage);
+    else if (a == "--height") o.height = integer_option(i, argc, argv, 2, 32768, usage);
+    else if (a == "--threads") o.threads = integer_option(i, argc, argv, 0, 1024, usage);
+    else if (a == "--samples") o.samples = integer_option(i, argc, argv, 1, 16, usage);
+    else if (a == "--output" || a == "-o") o.output = string_option(i, argc, argv, usage);
+    else if (pieces && a == "--tile") o.tile_text = string_option(i, argc, argv, usage);
+    else if (pieces && a == "--frames") o.frames_text = string_option(i, argc, argv, usage);
+    else return false;
+    return true;
+}
+
+/// Once every option is read: parses --tile and --frames (the last frame at most max_frame)
+/// and checks that the output (every frame's file) can take the image or band
+/// (width_factor·width wide).
+inline void finish(Options& o, const char* program, const char* usage, int max_frame, int width_factor = 1) {
+    if (!o.tile_text.empty()) o.tile = to_tile(o.tile_text, o.height, program, usage);
+    if (!o.frames_text.empty()) o.frames = to_frame_range(o.frames_text, max_frame, program, usage);
+    const int rows = isin::row_band(o.height, o.tile.index, o.tile.count).rows;
+    check_output(program, o.frames.given() ? frame_path(o.output, o.frames.first) : o.output, width_factor * o.width,
+                 rows, usage);
+}
+
+/// Parses the common options (common_option, finish), --tile and --frames with frames up to
+/// `max_frame` when it is ≥ 0; `usage` is printed for --help (to stdout, status 0) and on errors
+/// (stderr, status 2). The output must take an image `width_factor`·width × height.
+inline Options parse(int argc, char** argv, const char* usage, const std::string& default_output, int max_frame = -1,
                      int width_factor = 1) {
     Options o;
     o.output = default_output;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (a == "--help" || a == "-h") {
-            std::fputs(usage, stdout);
-            std::exit(0);
-        } else if (a == "--width") o.width = integer_option(i, argc, argv, 2, 32768, usage);
-        else if (a == "--height") o.height = integer_option(i, argc, argv, 2, 32768, usage);
-        else if (a == "--threads") o.threads = integer_option(i, argc, argv, 0, 1024, usage);
-        else if (a == "--samples") o.samples = integer_option(i, argc, argv, 1, 16, usage);
-        else if (a == "--output" || a == "-o") o.output = string_option(i, argc, argv, usage);
-        else fail(argv[0], "unknown option '" + a + "'", usage);
-    }
-    check_output(argv[0], o.output, width_factor * o.width, o.height, usage);
+    for (int i = 1; i < argc; ++i)
+        if (!common_option(i, argc, argv, o, usage, max_frame >= 0))
+            fail(argv[0], "unknown option '" + std::string(argv[i]) + "'", usage);
+    finish(o, argv[0], usage, max_frame, width_factor);
     return o;
+}
+
+/// Renders what `camera` sees, or only the band of rows o.tile names.
+template <class SceneT, class T>
+isin::Image render_tile(const SceneT& scene, const isin::Camera<T>& camera, const Options& o,
+                        const isin::RenderOptions& opt, isin::RenderStats* stats = nullptr) {
+    const isin::RowBand band = isin::row_band(camera.height(), o.tile.index, o.tile.count);
+    return isin::render_rows(scene, camera, band.first, band.rows, opt, stats);
 }
 
 } // namespace example

@@ -14,7 +14,7 @@ int main(int argc, char** argv) {
         "                        [--threads N]\n"
         "Renders the note's scene with the area test (left) and Möller–Trumbore (right) into one\n"
         "(2·width)×height image and prints the number of pixels that differ, and by how much.\n";
-    const auto o = example::parse(argc, argv, usage, "triangle_methods.png", 2); // writes (2·width)×height
+    const auto o = example::parse(argc, argv, usage, "triangle_methods.png", -1, 2); // writes (2·width)×height
     try {
         auto scene = note_scene::make<float>();
         const isin::Camera<float> camera{o.width, o.height};

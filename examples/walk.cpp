@@ -30,13 +30,18 @@ constexpr float turn_step = 5.0f * 3.14159265f / 180.0f; // 5° per turn key
 const char* usage =
     "usage: walk                                  interactive, in a terminal\n"
     "       walk --script KEYS [--output last.png] [--frames DIR] [--width 320] [--height 180]\n"
+    "       walk --script KEYS --frames A..B [--output walk_%04d.png] [--tile I/N] [...]\n"
     "       walk --benchmark [--width 160] [--height 180] [--frames N]\n"
     "       common: [--threads N] [--help]\n"
     "Walks through the note's scene (§12). Keys: W/A/S/D move, J/L (or ←/→) turn, I/K (or ↑/↓)\n"
     "look up/down, P writes the view to walk_N.png, Q quits. --script replays KEYS (the same\n"
     "letters; unknown characters are ignored) headlessly, writes the last frame to --output and,\n"
-    "with --frames DIR, every frame; it prints the final pose. --benchmark renders --frames frames\n"
-    "(default 60) while walking and prints frames per second.\n";
+    "with --frames DIR, every frame to DIR/frame_K.png; it prints the final pose. Frame 0 is the\n"
+    "start, frame K the view after the K-th key that moves: --frames A..B renders only frames A\n"
+    "to B, each to OUTPUT with its number (a %d or %04d in it is replaced, else _NNNN goes before\n"
+    "the extension). --tile I/N renders band I (from 0) of N bands of rows only (merge_tiles\n"
+    "stacks them). --benchmark renders --frames frames (default 60) while walking and prints\n"
+    "frames per second.\n";
 
 // Applies one key to the camera; returns false for keys that do nothing.
 bool apply_key(char key, isin::Camera<float>& cam) {
@@ -203,10 +208,11 @@ int interactive(const note_scene::Scene<float>& scene, isin::RenderOptions opt) 
 } // namespace
 
 int main(int argc, char** argv) {
-    std::string script, output = "last.png", frames_dir;
-    std::string frames_value; // --frames: a count with --benchmark, a directory with --script
-    bool scripted = false, benchmark = false;
+    std::string script, output = "last.png", frames_dir, tile_text;
+    std::string frames_value; // --frames: a count with --benchmark, a range or a directory with --script
+    bool scripted = false, benchmark = false, output_given = false;
     int width = 0, height = 0, frames = 60;
+    example::FrameRange range;
     isin::RenderOptions opt;
     opt.progress = false;
     auto fail = [&](const std::string& why) { example::fail("walk", why, usage); };
@@ -216,26 +222,44 @@ int main(int argc, char** argv) {
             std::fputs(usage, stdout);
             return 0;
         } else if (a == "--script") script = example::string_option(i, argc, argv, usage), scripted = true;
-        else if (a == "--output" || a == "-o") output = example::string_option(i, argc, argv, usage);
+        else if (a == "--output" || a == "-o") output = example::string_option(i, argc, argv, usage), output_given = true;
         else if (a == "--frames") frames_value = example::string_option(i, argc, argv, usage);
+        else if (a == "--tile") tile_text = example::string_option(i, argc, argv, usage);
         else if (a == "--width") width = example::integer_option(i, argc, argv, 2, 8192, usage);
         else if (a == "--height") height = example::integer_option(i, argc, argv, 2, 8192, usage);
         else if (a == "--threads") opt.threads = example::integer_option(i, argc, argv, 0, 1024, usage);
         else if (a == "--benchmark") benchmark = true;
         else fail("unknown option '" + a + "'");
     }
-    if (!frames_value.empty()) { // read once every option is known, whatever their order
-        if (scripted && !benchmark) {
-            frames_dir = frames_value;
-        } else {
-            frames = example::to_integer(frames_value, "--frames", 1, 100000, "walk", usage);
-        }
+    // Read once every option is known, whatever their order.
+    if (benchmark) {
+        if (!frames_value.empty()) frames = example::to_integer(frames_value, "--frames", 1, 100000, "walk", usage);
+        if (!tile_text.empty()) fail("--tile goes with --script");
+    } else if (!scripted) {
+        if (!frames_value.empty() || !tile_text.empty()) fail("--frames and --tile go with --script");
     }
-    if (scripted && !benchmark) example::check_output("walk", output, width ? width : 320, height ? height : 180, usage);
+    // The scripted walk: frame 0 is the start, frame k the pose after the k-th key that moves.
+    isin::Camera<float> start{width ? width : (benchmark ? 160 : 320), height ? height : 180};
+    std::vector<isin::Camera<float>> poses{start};
+    for (const char k : script)
+        if (apply_key(k, start)) poses.push_back(start);
+    example::Tile tile;
+    if (scripted && !benchmark) {
+        if (!tile_text.empty()) tile = example::to_tile(tile_text, start.height(), "walk", usage);
+        if (example::is_frame_range(frames_value)) {
+            range = example::to_frame_range(frames_value, int(poses.size()) - 1, "walk", usage);
+            if (!output_given) output = "walk_%04d.png";
+        } else {
+            frames_dir = frames_value;
+        }
+        const int rows = isin::row_band(start.height(), tile.index, tile.count).rows;
+        example::check_output("walk", range.given() ? example::frame_path(output, range.first) : output,
+                              start.width(), rows, usage);
+    }
     const auto scene = note_scene::make<float>();
     try {
         if (benchmark) {
-            isin::Camera<float> cam{width ? width : 160, height ? height : 180};
+            isin::Camera<float> cam = poses[0];
             std::vector<double> ms;
             std::uint64_t rays = 0;
             for (int f = 0; f < frames; ++f) {
@@ -252,19 +276,27 @@ int main(int argc, char** argv) {
             return 0;
         }
         if (scripted) {
-            isin::Camera<float> cam{width ? width : 320, height ? height : 180};
-            const isin::Image first = isin::render(scene, cam, opt);
+            const isin::RowBand band = isin::row_band(start.height(), tile.index, tile.count);
+            auto frame_image = [&](std::size_t f) { return isin::render_rows(scene, poses[f], band.first, band.rows, opt); };
+            if (range.given()) {
+                for (int f = range.first; f <= range.last; ++f) {
+                    const std::string path = example::frame_path(output, f);
+                    isin::write_image(frame_image(std::size_t(f)), path);
+                    std::printf("%s: frame %d of %zu\n", path.c_str(), f, poses.size() - 1);
+                }
+                print_pose(poses[std::size_t(range.last)]);
+                return 0;
+            }
+            const isin::Image first = frame_image(0);
             isin::Image last = first;
-            int frame = 0;
-            for (const char k : script) {
-                if (!apply_key(k, cam)) continue;
-                last = isin::render(scene, cam, opt);
-                if (!frames_dir.empty()) isin::write_png(last, frames_dir + "/frame_" + std::to_string(++frame) + ".png");
+            for (std::size_t f = 1; f < poses.size(); ++f) {
+                last = frame_image(f);
+                if (!frames_dir.empty()) isin::write_png(last, frames_dir + "/frame_" + std::to_string(f) + ".png");
             }
             isin::write_image(last, output);
             long differ = 0;
             for (std::size_t i = 0; i < first.pixels().size(); ++i) differ += first.pixels()[i] != last.pixels()[i];
-            print_pose(cam);
+            print_pose(poses.back());
             std::printf("%s: last frame differs from the first in %ld of %zu pixels\n", output.c_str(), differ,
                         first.pixels().size());
             return 0;

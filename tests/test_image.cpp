@@ -105,6 +105,24 @@ TEST_CASE("Image: fill colour, row-major layout from the top, checked and unchec
     CHECK(contains(thrown<std::out_of_range>([&] { (void)c.at(0, -1); }), "(0, -1)"));
 }
 
+TEST_CASE("stack_rows: images one above the other, first on top; bad sets throw") {
+    isin::Image top(3, 1, {1, 2, 3}), middle(3, 2, {4, 5, 6}), bottom(3, 1, {7, 8, 9});
+    middle(2, 1) = {10, 11, 12};
+    const isin::Image all = isin::stack_rows({top, middle, bottom});
+    CHECK(all.width() == 3);
+    CHECK(all.height() == 4);
+    CHECK(all(0, 0) == isin::Rgb8{1, 2, 3});
+    CHECK(all(1, 1) == isin::Rgb8{4, 5, 6});
+    CHECK(all(2, 2) == isin::Rgb8{10, 11, 12});
+    CHECK(all(0, 3) == isin::Rgb8{7, 8, 9});
+    CHECK(isin::stack_rows({middle}).pixels() == middle.pixels());
+    CHECK_THROWS_AS((void)isin::stack_rows({}), std::invalid_argument);
+    CHECK_THROWS_WITH_AS((void)isin::stack_rows({top, isin::Image(4, 1)}), "isin::stack_rows: widths differ (3 and 4)",
+                         std::invalid_argument);
+    const isin::Image tall(1, isin::Image::max_side);
+    CHECK_THROWS_AS((void)isin::stack_rows({tall, isin::Image(1, 1)}), std::invalid_argument);
+}
+
 TEST_CASE("write_ppm: binary P6 header, then RGB bytes row by row from the top") {
     TempDir dir{"isin-test-image-"};
     isin::Image image(2, 2);

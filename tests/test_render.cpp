@@ -7,10 +7,14 @@
 #include "../examples/note_scene.hpp"
 #include "common/workloads.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <random>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -158,6 +162,64 @@ TEST_CASE("render: threads, supersampling and culling options") {
     opt.samples = 1;
     opt.threads = -1;
     CHECK_THROWS_AS((void)isin::render(scene, cam, opt), std::invalid_argument);
+}
+
+TEST_CASE("row_band: N bands tile the rows in order, sizes within one row; bad bands throw") {
+    for (const int height : {2, 9, 90, 451, 32768})
+        for (const int count : {1, 2, 7, 9, 64}) {
+            if (count > height) {
+                CHECK_THROWS_AS((void)isin::row_band(height, 0, count), std::invalid_argument);
+                continue;
+            }
+            int next = 0, smallest = height, largest = 0;
+            for (int i = 0; i < count; ++i) {
+                const isin::RowBand band = isin::row_band(height, i, count);
+                CHECK(band.first == next);
+                next += band.rows;
+                smallest = std::min(smallest, band.rows), largest = std::max(largest, band.rows);
+            }
+            CHECK(next == height);
+            CHECK(smallest >= 1);
+            CHECK(largest - smallest <= 1);
+        }
+    CHECK(isin::row_band(90, 3, 7).first == 38); // ⌊3·90/7⌋
+    CHECK(isin::row_band(90, 3, 7).rows == 13);  // ⌊4·90/7⌋ − 38
+    CHECK_THROWS_AS((void)isin::row_band(90, 7, 7), std::invalid_argument);
+    CHECK_THROWS_AS((void)isin::row_band(90, -1, 7), std::invalid_argument);
+    CHECK_THROWS_AS((void)isin::row_band(90, 0, 0), std::invalid_argument);
+}
+
+TEST_CASE("render_rows: bands rendered apart and stacked are the whole render, bit for bit") {
+    const auto scene = note_scene::make<float>();
+    isin::Camera<float> cam{96, 54, {3, 1, -2}, 0.2f, -0.05f};
+    isin::RenderOptions opt;
+    opt.progress = false;
+    opt.samples = 2;
+    opt.culling = isin::Culling::projected;
+    opt.threads = 2;
+    isin::RenderStats whole_stats;
+    const isin::Image whole = isin::render(scene, cam, opt, &whole_stats);
+    for (const int count : {1, 2, 5, 54}) {
+        CAPTURE(count);
+        std::vector<isin::Image> bands;
+        isin::RenderStats sum;
+        for (int i = 0; i < count; ++i) {
+            opt.threads = 1 + i % 2;
+            const isin::RowBand band = isin::row_band(cam.height(), i, count);
+            isin::RenderStats stats;
+            bands.push_back(isin::render_rows(scene, cam, band.first, band.rows, opt, &stats));
+            CHECK(bands.back().height() == band.rows);
+            CHECK(stats.primary == std::uint64_t(4 * 96 * band.rows));
+            sum += stats;
+        }
+        CHECK(isin::stack_rows(bands).pixels() == whole.pixels());
+        CHECK(sum.rays() == whole_stats.rays()); // the same rays, only split
+    }
+    // One row in the middle is that row of the whole image.
+    const isin::Image row = isin::render_rows(scene, cam, 27, 1, opt);
+    CHECK(std::equal(row.pixels().begin(), row.pixels().end(), whole.pixels().begin() + 27 * 96));
+    for (const auto& [first, rows] : {std::pair{-1, 2}, std::pair{0, 0}, std::pair{53, 2}, std::pair{0, 55}})
+        CHECK_THROWS_AS((void)isin::render_rows(scene, cam, first, rows, opt), std::invalid_argument);
 }
 
 TEST_CASE_TEMPLATE("§11 render: both culling methods drop a triangle turned away from the eye", T,

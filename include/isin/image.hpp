@@ -68,4 +68,26 @@ private:
     std::vector<Rgb8> pixels_;
 };
 
+/// The images one above the other, the first on top: the bands of a picture rendered apart
+/// (render_rows) put back together. Throws std::invalid_argument if there are none, if their
+/// widths differ, or if the heights add up to more than Image::max_side.
+[[nodiscard]] inline Image stack_rows(const std::vector<Image>& bands) {
+    if (bands.empty()) throw std::invalid_argument("isin::stack_rows: no images");
+    long long height = 0;
+    for (const Image& b : bands) {
+        if (b.width() != bands[0].width())
+            throw std::invalid_argument("isin::stack_rows: widths differ (" + std::to_string(bands[0].width()) +
+                                        " and " + std::to_string(b.width()) + ")");
+        height += b.height();
+    }
+    if (height > Image::max_side)
+        throw std::invalid_argument("isin::stack_rows: " + std::to_string(height) + " rows in all, more than " +
+                                    std::to_string(Image::max_side));
+    Image out(bands[0].width(), int(height));
+    Rgb8* at = out.data();
+    for (const Image& b : bands)
+        for (const Rgb8& p : b.pixels()) *at++ = p;
+    return out;
+}
+
 } // namespace isin

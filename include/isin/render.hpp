@@ -8,7 +8,6 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
-#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -143,15 +142,34 @@ template <class T, template <class> class... S>
     return result;
 }
 
-/// Renders `scene` as seen by `camera` into a camera.width() × camera.height() image, on
-/// opt.threads threads (fewer if some cannot be started). Throws std::invalid_argument for
-/// samples outside [1, 16], negative threads, max_depth outside [0, max_depth_limit];
-/// std::out_of_range for an object or material whose material or texture does not exist
-/// (Scene::validate); and whatever a worker threw (e.g. a user primitive, std::bad_alloc), once
-/// every worker has stopped.
+/// A band of image rows: [first, first + rows).
+struct RowBand {
+    int first = 0, rows = 0;
+};
+
+/// Band `index` of `count` equal bands of an image `height` rows tall: rows
+/// [index·height/count, (index+1)·height/count), so the bands tile the image in order and differ
+/// in size by one row at most. Throws std::invalid_argument unless 1 ≤ count ≤ height and
+/// 0 ≤ index < count.
+[[nodiscard]] inline RowBand row_band(int height, int index, int count) {
+    if (count < 1 || count > height || index < 0 || index >= count)
+        throw std::invalid_argument("isin::row_band: band " + std::to_string(index) + " of " + std::to_string(count) +
+                                    " does not exist in an image " + std::to_string(height) + " rows tall");
+    const auto edge = [&](int i) { return int(std::int64_t(i) * height / count); };
+    return {edge(index), edge(index + 1) - edge(index)};
+}
+
+/// Renders rows [first_row, first_row + rows) of what `scene` looks like from `camera` into a
+/// camera.width() × rows image: the same pixels, bit for bit, as those rows of a whole render,
+/// so that bands rendered apart (other processes, other machines) can be stacked into the
+/// picture (examples/merge_tiles). On opt.threads threads (fewer if some cannot be started).
+/// Throws std::invalid_argument for samples outside [1, 16], negative threads, max_depth outside
+/// [0, max_depth_limit], rows outside the camera's; std::out_of_range for an object or
+/// material whose material or texture does not exist (Scene::validate); and whatever a worker
+/// threw (e.g. a user primitive, std::bad_alloc), once every worker has stopped.
 template <class T, template <class> class... S>
-[[nodiscard]] Image render(const Scene<T, S...>& scene, const Camera<T>& camera,
-                           const RenderOptions& opt = {}, RenderStats* stats_out = nullptr) {
+[[nodiscard]] Image render_rows(const Scene<T, S...>& scene, const Camera<T>& camera, int first_row, int rows,
+                                const RenderOptions& opt = {}, RenderStats* stats_out = nullptr) {
     if (opt.samples < 1 || opt.samples > 16)
         throw std::invalid_argument("isin::render: samples " + std::to_string(opt.samples) + " is outside [1, 16]");
     if (opt.threads < 0)
@@ -159,17 +177,19 @@ template <class T, template <class> class... S>
     if (opt.max_depth < 0 || opt.max_depth > RenderOptions::max_depth_limit)
         throw std::invalid_argument("isin::render: max_depth " + std::to_string(opt.max_depth) + " is outside [0, " +
                                     std::to_string(RenderOptions::max_depth_limit) + "]");
+    if (first_row < 0 || rows < 1 || first_row > camera.height() - rows)
+        throw std::invalid_argument("isin::render: rows " + std::to_string(first_row) + " + " + std::to_string(rows) +
+                                    " are not within the camera's " + std::to_string(camera.height()));
     scene.validate();
     const auto start = std::chrono::steady_clock::now();
-    const int W = camera.width(), H = camera.height(), N = opt.samples;
-    Image image(W, H);
+    const int W = camera.width(), N = opt.samples;
+    Image image(W, rows);
     const auto masks = backface_masks(scene, camera, opt.culling);
     const auto* skip = opt.culling == Culling::none ? nullptr : &masks;
 
-    const int threads = std::min(detail::thread_count(opt.threads), H);
+    const int threads = std::min(detail::thread_count(opt.threads), rows);
     std::atomic<int> next_row{0}, rows_done{0};
-    std::mutex stats_mutex;
-    RenderStats total;
+    std::vector<RenderStats> per_worker(static_cast<std::size_t>(threads)); // summed after the join: no lock
 #ifdef ISIN_HAVE_ISATTY
     const bool show_progress = opt.progress && isatty(STDERR_FILENO);
 #else
@@ -179,9 +199,10 @@ template <class T, template <class> class... S>
 
     auto work = [&](int worker, const detail::FirstError& error) {
         const bool reporter = worker == 0;
-        RenderStats local;
+        RenderStats local; // on the worker's own stack: no false sharing while counting
         auto last_report = start;
-        for (int y; !error.failed() && (y = next_row.fetch_add(1)) < H;) {
+        for (int row; !error.failed() && (row = next_row.fetch_add(1)) < rows;) {
+            const int y = first_row + row;
             for (int x = 0; x < W; ++x) {
                 Color<T> sum{T(0), T(0), T(0)};
                 for (int sy = 0; sy < N; ++sy)
@@ -191,7 +212,7 @@ template <class T, template <class> class... S>
                         ++local.primary;
                         sum += trace(scene, camera.primary_ray(px, py), 0, opt, local, skip); // §3
                     }
-                image(x, y) = to_rgb8(sum / T(N * N));
+                image(x, row) = to_rgb8(sum / T(N * N));
             }
             const int done = rows_done.fetch_add(1) + 1;
             if (reporter && show_progress) {
@@ -199,15 +220,14 @@ template <class T, template <class> class... S>
                 if (now - start > std::chrono::seconds(1) && now - last_report > std::chrono::milliseconds(100)) {
                     last_report = now;
                     progress_shown = true;
-                    const int filled = 40 * done / H;
+                    const int filled = 40 * done / rows;
                     std::fprintf(stderr, "\r[%.*s%*s] %3d%%", filled, "########################################",
-                                 40 - filled, "", 100 * done / H);
+                                 40 - filled, "", 100 * done / rows);
                     std::fflush(stderr);
                 }
             }
         }
-        const std::lock_guard<std::mutex> lock(stats_mutex);
-        total += local;
+        per_worker[std::size_t(worker)] = local;
     };
     try {
         detail::run_workers(threads, work);
@@ -216,9 +236,19 @@ template <class T, template <class> class... S>
         throw;
     }
     if (progress_shown) std::fprintf(stderr, "\r[%s] 100%%\n", "########################################");
+    RenderStats total;
+    for (const RenderStats& s : per_worker) total += s;
     total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (stats_out) *stats_out = total;
     return image;
+}
+
+/// Renders `scene` as seen by `camera` into a camera.width() × camera.height() image: all rows
+/// of render_rows, which says what it throws.
+template <class T, template <class> class... S>
+[[nodiscard]] Image render(const Scene<T, S...>& scene, const Camera<T>& camera, const RenderOptions& opt = {},
+                           RenderStats* stats_out = nullptr) {
+    return render_rows(scene, camera, 0, camera.height(), opt, stats_out);
 }
 
 } // namespace isin

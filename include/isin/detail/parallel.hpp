@@ -8,7 +8,6 @@
 #include <atomic>
 #include <cstddef>
 #include <exception>
-#include <mutex>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -20,20 +19,19 @@ class FirstError {
 public:
     /// Records the exception being handled, unless one was recorded before.
     void capture() noexcept {
-        const std::lock_guard<std::mutex> lock(mutex_);
-        if (!error_) error_ = std::current_exception();
-        failed_.store(true, std::memory_order_relaxed);
+        if (claimed_.exchange(true, std::memory_order_acq_rel)) return; // another worker's came first
+        error_ = std::current_exception();
+        failed_.store(true, std::memory_order_release);
     }
     [[nodiscard]] bool failed() const noexcept { return failed_.load(std::memory_order_relaxed); }
-    /// Rethrows the recorded exception, if any.
+    /// Rethrows the recorded exception, if any; call it once the workers have been joined.
     void rethrow() const {
-        if (error_) std::rethrow_exception(error_);
+        if (failed_.load(std::memory_order_acquire)) std::rethrow_exception(error_);
     }
 
 private:
-    std::mutex mutex_;
+    std::atomic<bool> claimed_{false}, failed_{false};
     std::exception_ptr error_;
-    std::atomic<bool> failed_{false};
 };
 
 /// The number of threads to use for `requested` (0 = every core; at least 1).
