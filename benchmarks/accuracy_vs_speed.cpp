@@ -18,12 +18,16 @@
 #include "methods.hpp"
 #include "../tests/common/workloads.hpp"
 
-
 namespace {
 
 using Q = __float128;
-struct QV { Q x, y, z; };
-template <class T> QV q(const isin::Vertex<T>& v) { return {Q(v.x), Q(v.y), Q(v.z)}; }
+struct QV {
+    Q x, y, z;
+};
+template <class T>
+QV q(const isin::Vertex<T>& v) {
+    return {Q(v.x), Q(v.y), Q(v.z)};
+}
 QV sub(QV a, QV b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 Q dotq(QV a, QV b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 QV crossq(QV a, QV b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
@@ -73,7 +77,10 @@ double quantile(std::vector<double> v, double p) {
     return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))];
 }
 
-template <class T> const char* precision_name() { return sizeof(T) == 4 ? "float" : "double"; }
+template <class T>
+const char* precision_name() {
+    return sizeof(T) == 4 ? "float" : "double";
+}
 
 // A workload with its references computed once (they are slow: __float128 in software).
 template <class T>
@@ -101,7 +108,8 @@ Row judge(const char* group, const char* workload, double param, const Judged<T>
         ++row.n;
         if (h && !expect) ++row.false_hits;
         if (!h && expect) ++row.false_misses;
-        if (h && expect) row.t_errors.push_back(double(Q(h.t) > ref.t ? (Q(h.t) - ref.t) / ref.t : (ref.t - Q(h.t)) / ref.t));
+        if (h && expect)
+            row.t_errors.push_back(double(Q(h.t) > ref.t ? (Q(h.t) - ref.t) / ref.t : (ref.t - Q(h.t)) / ref.t));
     }
     return row;
 }
@@ -225,7 +233,8 @@ void sphere_method(std::vector<Row>& rows, int repeats) {
     }
     if (checksum == 42) std::printf(" ");
     const BatchResult b = batch_sphere_method(M<T>::name, sizeof(T) == 4, repeats);
-    for (auto& r : mine) r.ns = quantile(ns, 0.5), r.ns_batch = b.ns, r.batch_agreement = b.agreement, rows.push_back(r);
+    for (auto& r : mine)
+        r.ns = quantile(ns, 0.5), r.ns_batch = b.ns, r.batch_agreement = b.agreement, rows.push_back(r);
 }
 
 template <class T>
@@ -237,9 +246,8 @@ void all_methods(std::vector<Row>& rows, int repeats) {
     triangle_method<methods::MollerTrumboreCull, T>(rows, w, repeats);
     triangle_method<methods::Watertight, T>(rows, w, repeats);
     triangle_method<methods::BaldwinWeber, T>(rows, w, repeats);
-    triangle_method<methods::MollerTrumboreBatch, T>(rows, w, repeats,
-                                                     sizeof(T) == 4 ? batch_ns_per_test_mt_float(repeats)
-                                                                    : batch_ns_per_test_mt_double(repeats));
+    triangle_method<methods::MollerTrumboreBatch, T>(
+        rows, w, repeats, sizeof(T) == 4 ? batch_ns_per_test_mt_float(repeats) : batch_ns_per_test_mt_double(repeats));
     sphere_method<methods::SphereNote, T>(rows, repeats);
     sphere_method<methods::SphereNoteFix, T>(rows, repeats);
     sphere_method<methods::SphereIsin, T>(rows, repeats);
@@ -253,9 +261,12 @@ int main(int argc, char** argv) {
     std::string csv = "accuracy_vs_speed.csv", points = "accuracy_vs_speed_points.csv";
     int repeats = 7;
     for (int i = 1; i < argc; ++i) {
-        if (!std::strcmp(argv[i], "--csv") && i + 1 < argc) csv = argv[++i];
-        else if (!std::strcmp(argv[i], "--points") && i + 1 < argc) points = argv[++i];
-        else if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc) repeats = std::max(1, std::atoi(argv[++i]));
+        if (!std::strcmp(argv[i], "--csv") && i + 1 < argc)
+            csv = argv[++i];
+        else if (!std::strcmp(argv[i], "--points") && i + 1 < argc)
+            points = argv[++i];
+        else if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc)
+            repeats = std::max(1, std::atoi(argv[++i]));
         else {
             std::printf("usage: accuracy_vs_speed [--csv FILE] [--points FILE] [--repeats N]\n");
             return std::strcmp(argv[i], "--help") ? 2 : 0;
@@ -266,17 +277,25 @@ int main(int argc, char** argv) {
     all_methods<double>(rows, repeats);
 
     FILE* f = std::fopen(csv.c_str(), "w");
-    if (!f) { std::perror(csv.c_str()); return 1; }
-    std::fprintf(f, "group,method,precision,workload,param,n,ns_per_test,false_hits,false_misses,leaks,doubles,self_hits,missed_exits,t_err_median,t_err_p999,ns_per_test_batch,batch_agreement\n");
+    if (!f) {
+        std::perror(csv.c_str());
+        return 1;
+    }
+    std::fprintf(f, "group,method,precision,workload,param,n,ns_per_test,false_hits,false_misses,leaks,doubles,self_"
+                    "hits,missed_exits,t_err_median,t_err_p999,ns_per_test_batch,batch_agreement\n");
     for (const auto& r : rows)
-        std::fprintf(f, "%s,%s,%s,%s,%g,%ld,%.3f,%ld,%ld,%ld,%ld,%ld,%ld,%.3g,%.3g,%.3f,%.6f\n", r.group.c_str(), r.method.c_str(),
-                     r.precision.c_str(), r.workload.c_str(), r.param, r.n, r.ns, r.false_hits, r.false_misses, r.leaks,
-                     r.doubles, r.self_hits, r.missed_exits, quantile(r.t_errors, 0.5), quantile(r.t_errors, 0.999), r.ns_batch,
-                     r.batch_agreement);
+        std::fprintf(f, "%s,%s,%s,%s,%g,%ld,%.3f,%ld,%ld,%ld,%ld,%ld,%ld,%.3g,%.3g,%.3f,%.6f\n", r.group.c_str(),
+                     r.method.c_str(), r.precision.c_str(), r.workload.c_str(), r.param, r.n, r.ns, r.false_hits,
+                     r.false_misses, r.leaks, r.doubles, r.self_hits, r.missed_exits, quantile(r.t_errors, 0.5),
+                     quantile(r.t_errors, 0.999), r.ns_batch, r.batch_agreement);
     std::fclose(f);
 
     // One point per method × precision × group: error rate over the whole group.
-    struct Agg { double ns = 0, ns_batch = 0, agreement = 0; long n = 0, errors = 0; std::vector<double> t; };
+    struct Agg {
+        double ns = 0, ns_batch = 0, agreement = 0;
+        long n = 0, errors = 0;
+        std::vector<double> t;
+    };
     std::map<std::string, Agg> agg;
     for (const auto& r : rows) {
         auto& a = agg[r.group + "," + r.method + "," + r.precision];
@@ -284,17 +303,24 @@ int main(int argc, char** argv) {
         a.t.insert(a.t.end(), r.t_errors.begin(), r.t_errors.end());
     }
     FILE* p = std::fopen(points.c_str(), "w");
-    if (!p) { std::perror(points.c_str()); return 1; }
-    std::fprintf(p, "group,method,precision,ns_per_test,n,errors,error_rate,t_err_p999,ns_per_test_batch,batch_agreement\n");
-    std::printf("%-8s %-21s %-6s %8s %8s %8s %9s %11s\n", "group", "method", "type", "ns/test", "batch ns", "tests", "errors", "t err p99.9");
+    if (!p) {
+        std::perror(points.c_str());
+        return 1;
+    }
+    std::fprintf(
+        p, "group,method,precision,ns_per_test,n,errors,error_rate,t_err_p999,ns_per_test_batch,batch_agreement\n");
+    std::printf("%-8s %-21s %-6s %8s %8s %8s %9s %11s\n", "group", "method", "type", "ns/test", "batch ns", "tests",
+                "errors", "t err p99.9");
     for (const auto& [key, a] : agg) {
-        std::fprintf(p, "%s,%.3f,%ld,%ld,%.6g,%.3g,%.3f,%.6f\n", key.c_str(), a.ns, a.n, a.errors, double(a.errors) / double(a.n),
-                     quantile(a.t, 0.999), a.ns_batch, a.agreement);
+        std::fprintf(p, "%s,%.3f,%ld,%ld,%.6g,%.3g,%.3f,%.6f\n", key.c_str(), a.ns, a.n, a.errors,
+                     double(a.errors) / double(a.n), quantile(a.t, 0.999), a.ns_batch, a.agreement);
         std::string k = key;
-        for (auto& ch : k) if (ch == ',') ch = ' ';
+        for (auto& ch : k)
+            if (ch == ',') ch = ' ';
         char g[32], m[32], t[16];
         std::sscanf(k.c_str(), "%31s %31s %15s", g, m, t);
-        std::printf("%-8s %-21s %-6s %8.2f %8.2f %8ld %9ld %11.2g\n", g, m, t, a.ns, a.ns_batch, a.n, a.errors, quantile(a.t, 0.999));
+        std::printf("%-8s %-21s %-6s %8.2f %8.2f %8ld %9ld %11.2g\n", g, m, t, a.ns, a.ns_batch, a.n, a.errors,
+                    quantile(a.t, 0.999));
     }
     std::fclose(p);
     return 0;

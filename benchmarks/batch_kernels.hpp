@@ -41,19 +41,28 @@ template <class T>
 struct Spheres {
     std::vector<T> cx, cy, cz, r;
     explicit Spheres(const std::vector<isin::Sphere<T>>& s) {
-        for (const auto& x : s) cx.push_back(x.center.x), cy.push_back(x.center.y), cz.push_back(x.center.z), r.push_back(x.radius);
+        for (const auto& x : s)
+            cx.push_back(x.center.x), cy.push_back(x.center.y), cz.push_back(x.center.z), r.push_back(x.radius);
     }
     std::size_t size() const { return r.size(); }
 };
 
-template <class T> constexpr T inf = std::numeric_limits<T>::infinity();
-template <class T> inline T mx(T a, T b) { return a < b ? b : a; }
-template <class T> inline T ab(T a) { return a < T(0) ? -a : a; }
+template <class T>
+constexpr T inf = std::numeric_limits<T>::infinity();
+template <class T>
+inline T mx(T a, T b) {
+    return a < b ? b : a;
+}
+template <class T>
+inline T ab(T a) {
+    return a < T(0) ? -a : a;
+}
 
 // §10 Möller–Trumbore, optionally culling (det ≤ 0); the division on every lane.
 template <class T, bool cull>
 void moller_trumbore(const isin::Ray<T>& ray, const Triangles<T>& b, T* __restrict out) {
-    const T ox = ray.origin.x, oy = ray.origin.y, oz = ray.origin.z, dx = ray.direction.x, dy = ray.direction.y, dz = ray.direction.z;
+    const T ox = ray.origin.x, oy = ray.origin.y, oz = ray.origin.z, dx = ray.direction.x, dy = ray.direction.y,
+            dz = ray.direction.z;
     for (std::size_t i = 0; i < b.size(); ++i) {
         const T e1x = b.x1[i] - b.x0[i], e1y = b.y1[i] - b.y0[i], e1z = b.z1[i] - b.z0[i];
         const T e2x = b.x2[i] - b.x0[i], e2y = b.y2[i] - b.y0[i], e2z = b.z2[i] - b.z0[i];
@@ -65,7 +74,8 @@ void moller_trumbore(const isin::Ray<T>& ray, const Triangles<T>& b, T* __restri
         const T qx = sy * e1z - sz * e1y, qy = sz * e1x - sx * e1z, qz = sx * e1y - sy * e1x;
         const T v = (dx * qx + dy * qy + dz * qz) * inv;
         const T t = (e2x * qx + e2y * qy + e2z * qz) * inv;
-        const bool ok = (cull ? det > T(0) : det != T(0)) & (u >= T(0)) & (u <= T(1)) & (v >= T(0)) & (u + v <= T(1)) & (t > T(0)) & (t < inf<T>);
+        const bool ok = (cull ? det > T(0) : det != T(0)) & (u >= T(0)) & (u <= T(1)) & (v >= T(0)) & (u + v <= T(1)) &
+                        (t > T(0)) & (t < inf<T>);
         out[i] = ok ? t : inf<T>;
     }
 }
@@ -81,9 +91,12 @@ void watertight(const isin::Ray<T>& ray, const Triangles<T>& b, T* __restrict ou
     if (dzc < T(0)) std::swap(kx, ky);
     const T Sx = isin::component(d, kx) / dzc, Sy = isin::component(d, ky) / dzc, Sz = T(1) / dzc;
     const std::vector<T>* v[3][3] = {{&b.x0, &b.y0, &b.z0}, {&b.x1, &b.y1, &b.z1}, {&b.x2, &b.y2, &b.z2}};
-    const T* X[3]; const T* Y[3]; const T* Z[3];
+    const T* X[3];
+    const T* Y[3];
+    const T* Z[3];
     for (int k = 0; k < 3; ++k) X[k] = v[k][kx]->data(), Y[k] = v[k][ky]->data(), Z[k] = v[k][kz]->data();
-    const T ox = isin::component(ray.origin, kx), oy = isin::component(ray.origin, ky), oz = isin::component(ray.origin, kz);
+    const T ox = isin::component(ray.origin, kx), oy = isin::component(ray.origin, ky),
+            oz = isin::component(ray.origin, kz);
     for (std::size_t i = 0; i < b.size(); ++i) {
         const T Az = Z[0][i] - oz, Bz = Z[1][i] - oz, Cz = Z[2][i] - oz;
         const T Ax = X[0][i] - ox - Sx * Az, Ay = Y[0][i] - oy - Sy * Az;
@@ -107,8 +120,8 @@ struct Transforms {
     explicit Transforms(const std::vector<isin::Triangle<T>>& tris) {
         for (const auto& t : tris) {
             const auto bw = isin::baldwin_weber_transform(t);
-            const T v[12] = {bw.row_u.x, bw.row_u.y, bw.row_u.z, bw.off_u, bw.row_v.x, bw.row_v.y,
-                             bw.row_v.z, bw.off_v, bw.row_w.x, bw.row_w.y, bw.row_w.z, bw.off_w};
+            const T v[12] = {bw.row_u.x, bw.row_u.y, bw.row_u.z, bw.off_u,   bw.row_v.x, bw.row_v.y,
+                             bw.row_v.z, bw.off_v,   bw.row_w.x, bw.row_w.y, bw.row_w.z, bw.off_w};
             for (int k = 0; k < 12; ++k) c[k].push_back(v[k]);
         }
     }
@@ -116,7 +129,8 @@ struct Transforms {
 };
 template <class T>
 void baldwin_weber(const isin::Ray<T>& ray, const Transforms<T>& b, T* __restrict out) {
-    const T ox = ray.origin.x, oy = ray.origin.y, oz = ray.origin.z, dx = ray.direction.x, dy = ray.direction.y, dz = ray.direction.z;
+    const T ox = ray.origin.x, oy = ray.origin.y, oz = ray.origin.z, dx = ray.direction.x, dy = ray.direction.y,
+            dz = ray.direction.z;
     for (std::size_t i = 0; i < b.size(); ++i) {
         const T wo = b.c[8][i] * ox + b.c[9][i] * oy + b.c[10][i] * oz + b.c[11][i];
         const T wd = b.c[8][i] * dx + b.c[9][i] * dy + b.c[10][i] * dz;
@@ -124,7 +138,7 @@ void baldwin_weber(const isin::Ray<T>& ray, const Transforms<T>& b, T* __restric
         const T px = ox + t * dx, py = oy + t * dy, pz = oz + t * dz;
         const T u = b.c[0][i] * px + b.c[1][i] * py + b.c[2][i] * pz + b.c[3][i];
         const T v = b.c[4][i] * px + b.c[5][i] * py + b.c[6][i] * pz + b.c[7][i];
-        const bool ok = (t > T(0)) & (t < inf<T>) & (u >= T(0)) & (v >= T(0)) & (u + v <= T(1));
+        const bool ok = (t > T(0)) & (t < inf<T>)&(u >= T(0)) & (v >= T(0)) & (u + v <= T(1));
         out[i] = ok ? t : inf<T>;
     }
 }
@@ -138,14 +152,15 @@ void area(const isin::Ray<T>& ray, const Triangles<T>& b, T* __restrict out, T e
         const T x0 = b.x0[i], y0 = b.y0[i], z0 = b.z0[i];
         // relative: everything relative to V0; note: absolute coordinates
         const T bx = relative ? T(0) : x0, by = relative ? T(0) : y0, bz = relative ? T(0) : z0;
-        const T ox = ray.origin.x - (relative ? x0 : T(0)), oy = ray.origin.y - (relative ? y0 : T(0)), oz = ray.origin.z - (relative ? z0 : T(0));
+        const T ox = ray.origin.x - (relative ? x0 : T(0)), oy = ray.origin.y - (relative ? y0 : T(0)),
+                oz = ray.origin.z - (relative ? z0 : T(0));
         const T e1x = b.x1[i] - x0, e1y = b.y1[i] - y0, e1z = b.z1[i] - z0;
         const T e2x = b.x2[i] - x0, e2y = b.y2[i] - y0, e2z = b.z2[i] - z0;
         const T Nx = e1y * e2z - e1z * e2y, Ny = e1z * e2x - e1x * e2z, Nz = e1x * e2y - e1y * e2x;
         const T D = -(Nx * bx + Ny * by + Nz * bz);
         const T t = -(Nx * ox + Ny * oy + Nz * oz + D) / (Nx * dx + Ny * dy + Nz * dz);
         const T Rx = ox + t * dx, Ry = oy + t * dy, Rz = oz + t * dz;
-        const T ax = Rx - bx, ay = Ry - by, az = Rz - bz;                 // R − V0
+        const T ax = Rx - bx, ay = Ry - by, az = Rz - bz; // R − V0
         const T S = std::sqrt(Nx * Nx + Ny * Ny + Nz * Nz);
         const T c1x = ay * e2z - az * e2y, c1y = az * e2x - ax * e2z, c1z = ax * e2y - ay * e2x;
         const T c2x = e1y * az - e1z * ay, c2y = e1z * ax - e1x * az, c2z = e1x * ay - e1y * ax;
@@ -158,8 +173,9 @@ void area(const isin::Ray<T>& ray, const Triangles<T>& b, T* __restrict out, T e
         const T M = mx(mx(mx(ab(Rx), ab(Ry)), ab(Rz)), mx(mx(ab(ox), ab(oy)), ab(oz)));
         const T tol = relative ? T(8) * eps * (S + L * M) : epsilon;
         const T Nm = mx(mx(ab(Nx), ab(Ny)), ab(Nz));
-        const bool nondegenerate = Nm > T(8) * eps * mx(mx(ab(e1x), ab(e1y)), ab(e1z)) * mx(mx(ab(e2x), ab(e2y)), ab(e2z));
-        const bool ok = nondegenerate & (t > T(0)) & (t < inf<T>) & (ab(S - s) <= tol);
+        const bool nondegenerate =
+            Nm > T(8) * eps * mx(mx(ab(e1x), ab(e1y)), ab(e1z)) * mx(mx(ab(e2x), ab(e2y)), ab(e2z));
+        const bool ok = nondegenerate & (t > T(0)) & (t < inf<T>)&(ab(S - s) <= tol);
         out[i] = ok ? t : inf<T>;
     }
 }
@@ -171,12 +187,13 @@ enum class SphereMethod { note, note_fix, isin, quadratic, rtg };
 template <class T, SphereMethod m>
 void spheres(const isin::Ray<T>& ray, const Spheres<T>& b, T* __restrict out) {
     constexpr T eps = std::numeric_limits<T>::epsilon();
-    const T ox = ray.origin.x, oy = ray.origin.y, oz = ray.origin.z, dx = ray.direction.x, dy = ray.direction.y, dz = ray.direction.z;
+    const T ox = ray.origin.x, oy = ray.origin.y, oz = ray.origin.z, dx = ray.direction.x, dy = ray.direction.y,
+            dz = ray.direction.z;
     const T a = dx * dx + dy * dy + dz * dz, inv_a = T(1) / a;
     const T omax = mx(mx(ab(ox), ab(oy)), ab(oz));
     for (std::size_t i = 0; i < b.size(); ++i) {
         const T r = b.r[i], r2 = r * r;
-        const T lx = b.cx[i] - ox, ly = b.cy[i] - oy, lz = b.cz[i] - oz;   // l = C − Ro
+        const T lx = b.cx[i] - ox, ly = b.cy[i] - oy, lz = b.cz[i] - oz; // l = C − Ro
         const T l2 = lx * lx + ly * ly + lz * lz;
         T t;
         bool ok;
@@ -204,7 +221,7 @@ void spheres(const isin::Ray<T>& ray, const Spheres<T>& b, T* __restrict out) {
             const T t0 = (-bq - root) / (T(2) * a), t1 = (-bq + root) / (T(2) * a);
             t = t0 > T(0) ? t0 : t1;
             ok = disc >= T(0);
-        } else { // rtg
+        } else {                                      // rtg
             const T bq = lx * dx + ly * dy + lz * dz; // b′ = −f·d with f = Ro − C = −l
             const T gx = -lx + (bq * inv_a) * dx, gy = -ly + (bq * inv_a) * dy, gz = -lz + (bq * inv_a) * dz;
             const T delta = r2 - (gx * gx + gy * gy + gz * gz), c = l2 - r2;

@@ -19,7 +19,8 @@ double median_ns(int repeats, std::size_t tests, F&& run) {
     for (int r = 0; r < repeats; ++r) {
         const auto start = std::chrono::steady_clock::now();
         run();
-        ns.push_back(std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() / double(tests));
+        ns.push_back(std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() /
+                     double(tests));
     }
     std::sort(ns.begin(), ns.end());
     return ns[ns.size() / 2];
@@ -38,12 +39,18 @@ isin::Hit<T> scalar_triangle(const std::string& m, const isin::Ray<T>& r, const 
 template <class T>
 void batch_triangle(const std::string& m, const isin::Ray<T>& r, const batch::Triangles<T>& b,
                     const batch::Transforms<T>& bw, T* out) {
-    if (m == "area-note") batch::area<T, false>(r, b, out, T(0.005));
-    else if (m == "area-relative") batch::area<T, true>(r, b, out, T(0));
-    else if (m == "moller-trumbore") batch::moller_trumbore<T, false>(r, b, out);
-    else if (m == "moller-trumbore-cull") batch::moller_trumbore<T, true>(r, b, out);
-    else if (m == "watertight") batch::watertight(r, b, out);
-    else batch::baldwin_weber(r, bw, out);
+    if (m == "area-note")
+        batch::area<T, false>(r, b, out, T(0.005));
+    else if (m == "area-relative")
+        batch::area<T, true>(r, b, out, T(0));
+    else if (m == "moller-trumbore")
+        batch::moller_trumbore<T, false>(r, b, out);
+    else if (m == "moller-trumbore-cull")
+        batch::moller_trumbore<T, true>(r, b, out);
+    else if (m == "watertight")
+        batch::watertight(r, b, out);
+    else
+        batch::baldwin_weber(r, bw, out);
 }
 
 template <class T>
@@ -123,7 +130,8 @@ BatchResult spheres(batch::SphereMethod m, int repeats) {
     for (std::size_t i = 0; i < 256; ++i)
         for (const auto& s : list) check(rays[i], s);
     for (double radius : {1e-3, 1.0, 1e3})
-        for (const auto& c : workloads::sphere_restarts<T>(radius, 0.0, 500)) check(c.outward, c.sphere), check(c.inward, c.sphere);
+        for (const auto& c : workloads::sphere_restarts<T>(radius, 0.0, 500))
+            check(c.outward, c.sphere), check(c.inward, c.sphere);
     res.agreement = double(same) / double(n) + (checksum == 42 ? 1 : 0);
     return res;
 }
@@ -136,9 +144,9 @@ BatchResult batch_triangle_method(const char* method, bool is_float, int repeats
 
 BatchResult batch_sphere_method(const char* method, bool is_float, int repeats) {
     const std::string m = method;
-    const auto which = m == "sphere-note" ? batch::SphereMethod::note
-                       : m == "sphere-note-fix" ? batch::SphereMethod::note_fix
-                       : m == "sphere-isin" ? batch::SphereMethod::isin
+    const auto which = m == "sphere-note"        ? batch::SphereMethod::note
+                       : m == "sphere-note-fix"  ? batch::SphereMethod::note_fix
+                       : m == "sphere-isin"      ? batch::SphereMethod::isin
                        : m == "sphere-quadratic" ? batch::SphereMethod::quadratic
                                                  : batch::SphereMethod::rtg;
     return is_float ? spheres<float>(which, repeats) : spheres<double>(which, repeats);

@@ -27,14 +27,15 @@ inline RTCScene make(RTCDevice device, const std::vector<isin::Triangle<float>>&
     RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_MEDIUM);
     const std::size_t n = tris.size();
-    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                                 3 * sizeof(float), 3 * n));
-    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                   3 * sizeof(unsigned), n));
+    auto* vertices = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * n));
+    auto* indices = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), n));
     for (std::size_t k = 0; k < n; ++k) {
         const isin::Vertex<float>* v[3] = {&tris[k].v0, &tris[k].v1, &tris[k].v2};
         for (std::size_t i = 0; i < 3; ++i) {
-            vertices[9 * k + 3 * i] = v[i]->x, vertices[9 * k + 3 * i + 1] = v[i]->y, vertices[9 * k + 3 * i + 2] = v[i]->z;
+            vertices[9 * k + 3 * i] = v[i]->x, vertices[9 * k + 3 * i + 1] = v[i]->y,
+                                 vertices[9 * k + 3 * i + 2] = v[i]->z;
             indices[3 * k + i] = unsigned(3 * k + i);
         }
     }

@@ -74,8 +74,9 @@ struct Pass {
 
 // Rays through each tracer in turn, `repeats` times; Mrays/s medians (in `mrays`) and the last
 // pass's totals.
-inline void race(const std::vector<Ray>& rays, int repeats, const std::vector<std::function<float(const Ray&)>>& tracers,
-                 std::vector<double>& mrays, std::vector<Pass>& totals) {
+inline void race(const std::vector<Ray>& rays, int repeats,
+                 const std::vector<std::function<float(const Ray&)>>& tracers, std::vector<double>& mrays,
+                 std::vector<Pass>& totals) {
     std::vector<std::vector<double>> s(tracers.size());
     totals.assign(tracers.size(), {});
     for (int rep = 0; rep < repeats; ++rep)
@@ -136,10 +137,10 @@ inline RTCGeometry embree_geometry(RTCDevice device, const isin::Mesh<float>& me
                                    RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     rtcSetGeometryBuildQuality(g, quality);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                          mesh.positions.size()));
-    auto* i = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-                                                             mesh.indices.size()));
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), mesh.positions.size()));
+    auto* i = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                             3 * sizeof(unsigned), mesh.indices.size()));
     for (std::size_t k = 0; k < mesh.positions.size(); ++k)
         v[3 * k] = mesh.positions[k].x, v[3 * k + 1] = mesh.positions[k].y, v[3 * k + 2] = mesh.positions[k].z;
     for (std::size_t k = 0; k < mesh.indices.size(); ++k)
@@ -170,10 +171,12 @@ inline bool close(double a, double b, double tolerance) {
 inline void spheres(RTCDevice device, const Config& cfg, bool& all_ok) {
     std::printf("\nspheres: n random spheres in view, %dx%d primary rays, Mrays/s (isin Scene: Bvh from %zu spheres)\n",
                 cfg.width, cfg.height, isin::Scene<float, isin::Sphere>{}.shape_bvh_min);
-    std::printf("%9s | %7s %7s %7s | %7s %7s | %6s %6s\n", "spheres", "isin", "1 by 1", "Bvh", "E-point", "E-user", "/point", "/user");
+    std::printf("%9s | %7s %7s %7s | %7s %7s | %6s %6s\n", "spheres", "isin", "1 by 1", "Bvh", "E-point", "E-user",
+                "/point", "/user");
     const auto rays = primary_rays(cfg);
-    for (const std::size_t n : {std::size_t(1), std::size_t(4), std::size_t(8), std::size_t(16), std::size_t(64), std::size_t(256),
-                                std::size_t(1000), std::size_t(10000), std::size_t(100000), std::size_t(1000000)}) {
+    for (const std::size_t n :
+         {std::size_t(1), std::size_t(4), std::size_t(8), std::size_t(16), std::size_t(64), std::size_t(256),
+          std::size_t(1000), std::size_t(10000), std::size_t(100000), std::size_t(1000000)}) {
         std::mt19937_64 rng(n);
         const auto uni = [&](double lo, double hi) { return meshes::uniform(rng, lo, hi); };
         // in the view of the note's camera: x ∈ ±0.8z, y ∈ ±0.45z, z ∈ [30, 60]; radii so that about
@@ -182,7 +185,8 @@ inline void spheres(RTCDevice device, const Config& cfg, bool& all_ok) {
         std::vector<isin::Sphere<float>> balls;
         for (std::size_t i = 0; i < n; ++i) {
             const double z = uni(30, 60);
-            balls.push_back({{float(uni(-0.8, 0.8) * z), float(uni(-0.45, 0.45) * z), float(z)}, float(r * uni(0.5, 1.0))});
+            balls.push_back(
+                {{float(uni(-0.8, 0.8) * z), float(uni(-0.45, 0.45) * z), float(z)}, float(r * uni(0.5, 1.0))});
         }
         isin::Scene<float, isin::Sphere> scene;
         const auto m = scene.add_material({});
@@ -196,9 +200,11 @@ inline void spheres(RTCDevice device, const Config& cfg, bool& all_ok) {
         RTCScene points = rtcNewScene(device);
         {
             RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-            auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), n));
+            auto* v = static_cast<float*>(
+                rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), n));
             for (std::size_t i = 0; i < n; ++i)
-                v[4 * i] = balls[i].center.x, v[4 * i + 1] = balls[i].center.y, v[4 * i + 2] = balls[i].center.z, v[4 * i + 3] = balls[i].radius;
+                v[4 * i] = balls[i].center.x, v[4 * i + 1] = balls[i].center.y, v[4 * i + 2] = balls[i].center.z,
+                      v[4 * i + 3] = balls[i].radius;
             rtcCommitGeometry(g);
             rtcAttachGeometry(points, g);
             rtcReleaseGeometry(g);
@@ -209,16 +215,23 @@ inline void spheres(RTCDevice device, const Config& cfg, bool& all_ok) {
             RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
             rtcSetGeometryUserPrimitiveCount(g, unsigned(n));
             rtcSetGeometryUserData(g, &balls);
-            rtcSetGeometryBoundsFunction(g, [](const RTCBoundsFunctionArguments* a) {
-                const auto& s = (*static_cast<const std::vector<isin::Sphere<float>>*>(a->geometryUserPtr))[a->primID];
-                a->bounds_o->lower_x = s.center.x - s.radius, a->bounds_o->lower_y = s.center.y - s.radius, a->bounds_o->lower_z = s.center.z - s.radius;
-                a->bounds_o->upper_x = s.center.x + s.radius, a->bounds_o->upper_y = s.center.y + s.radius, a->bounds_o->upper_z = s.center.z + s.radius;
-            }, nullptr);
+            rtcSetGeometryBoundsFunction(
+                g,
+                [](const RTCBoundsFunctionArguments* a) {
+                    const auto& s =
+                        (*static_cast<const std::vector<isin::Sphere<float>>*>(a->geometryUserPtr))[a->primID];
+                    a->bounds_o->lower_x = s.center.x - s.radius, a->bounds_o->lower_y = s.center.y - s.radius,
+                    a->bounds_o->lower_z = s.center.z - s.radius;
+                    a->bounds_o->upper_x = s.center.x + s.radius, a->bounds_o->upper_y = s.center.y + s.radius,
+                    a->bounds_o->upper_z = s.center.z + s.radius;
+                },
+                nullptr);
             rtcSetGeometryIntersectFunction(g, [](const RTCIntersectFunctionNArguments* a) {
                 if (!a->valid[0]) return;
                 const auto& s = (*static_cast<const std::vector<isin::Sphere<float>>*>(a->geometryUserPtr))[a->primID];
                 RTCRayHit* rh = reinterpret_cast<RTCRayHit*>(a->rayhit);
-                const Ray ray{{rh->ray.org_x, rh->ray.org_y, rh->ray.org_z}, {rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z}};
+                const Ray ray{{rh->ray.org_x, rh->ray.org_y, rh->ray.org_z},
+                              {rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z}};
                 const auto h = isin::intersect(ray, s);
                 if (!(h.t < rh->ray.tfar) || !(h.t > rh->ray.tnear)) return;
                 rh->ray.tfar = h.t;
@@ -242,13 +255,14 @@ inline void spheres(RTCDevice device, const Config& cfg, bool& all_ok) {
         std::vector<Pass> tot;
         race(rays, n >= 100000 ? 3 : cfg.repeats, tracers, mr, tot);
         const double one_by_one = n <= 1000 ? mr[3] : std::nan(""), always_bvh = n <= 1000 ? mr[4] : std::nan("");
-        std::printf("%9zu | %7.2f %7.2f %7.2f | %7.2f %7.2f | %6.2f %6.2f   hits %llu / %llu / %llu\n", n, mr[0], one_by_one,
-                    always_bvh, mr[1], mr[2], mr[0] / mr[1], mr[0] / mr[2], static_cast<unsigned long long>(tot[0].hits),
-                    static_cast<unsigned long long>(tot[1].hits), static_cast<unsigned long long>(tot[2].hits));
+        std::printf("%9zu | %7.2f %7.2f %7.2f | %7.2f %7.2f | %6.2f %6.2f   hits %llu / %llu / %llu\n", n, mr[0],
+                    one_by_one, always_bvh, mr[1], mr[2], mr[0] / mr[1], mr[0] / mr[2],
+                    static_cast<unsigned long long>(tot[0].hits), static_cast<unsigned long long>(tot[1].hits),
+                    static_cast<unsigned long long>(tot[2].hits));
         std::fflush(stdout);
         // Embree's own sphere test rounds differently at the silhouettes; user geometry runs isin's.
-        check(tot[0].hits == tot[2].hits && close(tot[0].sum_t, tot[2].sum_t, 1e-6), "spheres: isin and Embree user geometry",
-              all_ok);
+        check(tot[0].hits == tot[2].hits && close(tot[0].sum_t, tot[2].sum_t, 1e-6),
+              "spheres: isin and Embree user geometry", all_ok);
         check(close(double(tot[0].hits), double(tot[1].hits), 1e-3), "spheres: isin and Embree points", all_ok);
         if (n <= 1000) check(tot[0].hits == tot[3].hits, "spheres: Bvh and one by one", all_ok);
         rtcReleaseScene(points);
@@ -268,8 +282,9 @@ inline void instances(RTCDevice device, const Config& cfg, bool& all_ok) {
     const auto uni = [&](double lo, double hi) { return float(meshes::uniform(rng, lo, hi)); };
     for (int i = 0; i < 1000; ++i) { // a 10×10×10 lattice in view, each turned and sized at random
         const float z = 60 + 12 * float(i / 100);
-        places.push_back(X::translation({(float(i % 10) - 4.5f) * 0.16f * z, (float((i / 10) % 10) - 4.5f) * 0.09f * z, z}) *
-                         X::rotation({uni(-1, 1), uni(-1, 1), uni(-1, 1)}, uni(0, 3)) * X::scaling(uni(0.08f, 0.2f)) * home);
+        places.push_back(
+            X::translation({(float(i % 10) - 4.5f) * 0.16f * z, (float((i / 10) % 10) - 4.5f) * 0.09f * z, z}) *
+            X::rotation({uni(-1, 1), uni(-1, 1), uni(-1, 1)}, uni(0, 3)) * X::scaling(uni(0.08f, 0.2f)) * home);
     }
     auto t0 = Clock::now();
     isin::Scene<float, isin::Sphere> scene;
@@ -308,9 +323,11 @@ inline void instances(RTCDevice device, const Config& cfg, bool& all_ok) {
     const auto rays = primary_rays(cfg);
     std::vector<double> mr;
     std::vector<Pass> tot;
-    race(rays, cfg.repeats, {[&](const Ray& r) { return scene.intersect(r).t; }, [&](const Ray& r) { return embree_nearest(world, r); }},
+    race(rays, cfg.repeats,
+         {[&](const Ray& r) { return scene.intersect(r).t; }, [&](const Ray& r) { return embree_nearest(world, r); }},
          mr, tot);
-    std::printf("\ninstances: 1001 placements of an 81,920-triangle icosphere, %dx%d primary rays\n", cfg.width, cfg.height);
+    std::printf("\ninstances: 1001 placements of an 81,920-triangle icosphere, %dx%d primary rays\n", cfg.width,
+                cfg.height);
     std::printf("  isin %.2f Mrays/s, Embree %.2f (isin/Embree %.2f); hits %llu / %llu; build: isin mesh %.1f ms + "
                 "placements %.1f ms, Embree %.1f ms; memory: isin %.1f MB, Embree %.1f MB\n",
                 mr[0], mr[1], mr[0] / mr[1], static_cast<unsigned long long>(tot[0].hits),
@@ -352,7 +369,8 @@ inline void transparency(const Config& cfg, bool& all_ok) {
             for (const auto& [ray, t_max] : shadow) sum[k] += double(scene.transmittance(ray, t_max));
             s[k].push_back(seconds_since(t0));
         }
-    const double opaque_mrays = double(shadow.size()) / median_of(s[0]) * 1e-6, glass_mrays = double(shadow.size()) / median_of(s[1]) * 1e-6;
+    const double opaque_mrays = double(shadow.size()) / median_of(s[0]) * 1e-6,
+                 glass_mrays = double(shadow.size()) / median_of(s[1]) * 1e-6;
     std::printf("\ntransparency: %zu shadow rays through the 300k-triangle trefoil knot: opaque %.2f Mrays/s, glass "
                 "(transparency 0.6, every crossing multiplied) %.2f Mrays/s: glass costs %.2f× opaque; light through: "
                 "opaque %.0f, glass %.1f\n",
@@ -403,15 +421,19 @@ inline void refit(RTCDevice device, const Config& cfg, bool& all_ok) {
         const auto rays = primary_rays(cfg);
         std::vector<double> mr;
         std::vector<Pass> tot;
-        race(rays, cfg.repeats, {[&](const Ray& r) { return bvh.intersect(r).t; }, [&](const Ray& r) { return fresh.intersect(r).t; },
-                                 [&](const Ray& r) { return embree_nearest(scene, r); }},
+        race(rays, cfg.repeats,
+             {[&](const Ray& r) { return bvh.intersect(r).t; }, [&](const Ray& r) { return fresh.intersect(r).t; },
+              [&](const Ray& r) { return embree_nearest(scene, r); }},
              mr, tot);
-        std::printf("\nrefit: %zu-triangle icosphere, 10 frames of a wave: isin refit %.2f ms, rebuild %.2f ms (%.1f× the "
-                    "refit), Embree refit %.2f ms (medians); after 10 refits isin traces %.2f Mrays/s, %.2f× a fresh "
-                    "build's %.2f, Embree after its refits %.2f\n",
-                    mesh.size(), median_of(isin_refit) * 1e3, median_of(isin_build) * 1e3,
-                    median_of(isin_build) / median_of(isin_refit), median_of(embree_refit) * 1e3, mr[0], mr[0] / mr[1], mr[1], mr[2]);
-        check(tot[0].hits == tot[1].hits && close(tot[0].sum_t, tot[1].sum_t, 1e-9), "refit: refitted and rebuilt Bvh", all_ok);
+        std::printf(
+            "\nrefit: %zu-triangle icosphere, 10 frames of a wave: isin refit %.2f ms, rebuild %.2f ms (%.1f× the "
+            "refit), Embree refit %.2f ms (medians); after 10 refits isin traces %.2f Mrays/s, %.2f× a fresh "
+            "build's %.2f, Embree after its refits %.2f\n",
+            mesh.size(), median_of(isin_refit) * 1e3, median_of(isin_build) * 1e3,
+            median_of(isin_build) / median_of(isin_refit), median_of(embree_refit) * 1e3, mr[0], mr[0] / mr[1], mr[1],
+            mr[2]);
+        check(tot[0].hits == tot[1].hits && close(tot[0].sum_t, tot[1].sum_t, 1e-9), "refit: refitted and rebuilt Bvh",
+              all_ok);
         check(close(double(tot[0].hits), double(tot[2].hits), 1e-4), "refit: isin and Embree", all_ok);
         rtcReleaseGeometry(g);
         rtcReleaseScene(scene);
@@ -435,14 +457,18 @@ inline void groups(const Config& cfg, bool& all_ok) {
         const auto m = parts.add_material({});
         const std::size_t step = (tris.size() + 19) / 20;
         for (std::size_t g = 0; g < tris.size(); g += step)
-            parts.add_mesh(std::vector<isin::Triangle<float>>(tris.begin() + long(g), tris.begin() + long(std::min(tris.size(), g + step))), m);
+            parts.add_mesh(std::vector<isin::Triangle<float>>(tris.begin() + long(g),
+                                                              tris.begin() + long(std::min(tris.size(), g + step))),
+                           m);
         parts.commit();
         twenty.push_back(seconds_since(t0));
     }
     const auto rays = primary_rays(cfg);
     std::vector<double> mr;
     std::vector<Pass> tot;
-    race(rays, cfg.repeats, {[&](const Ray& r) { return whole.intersect(r).t; }, [&](const Ray& r) { return parts.intersect(r).t; }}, mr, tot);
+    race(rays, cfg.repeats,
+         {[&](const Ray& r) { return whole.intersect(r).t; }, [&](const Ray& r) { return parts.intersect(r).t; }}, mr,
+         tot);
     std::printf("\ngroups: the 300k-triangle trefoil knot as one mesh: %.1f ms; as 20 meshes: %.1f ms (%.2f×); traced "
                 "%.2f and %.2f Mrays/s\n",
                 median_of(one) * 1e3, median_of(twenty) * 1e3, median_of(twenty) / median_of(one), mr[0], mr[1]);
@@ -459,11 +485,13 @@ inline void memory(RTCDevice device) {
         const long long before = embree_bytes;
         RTCScene embree = embree_scene_of(device, mesh);
         const long long embree_mem = embree_bytes - before;
-        const std::size_t mesh_bytes = mesh.positions.size() * sizeof(mesh.positions[0]) + mesh.indices.size() * sizeof(mesh.indices[0]);
-        std::printf("  %-15s %8zu triangles %8zu vertices: isin %7.1f MB (mesh %.1f + Bvh %.1f), Embree %7.1f MB: %.2f×\n",
-                    name.c_str(), mesh.size(), mesh.positions.size(), double(scene.memory()) / 1e6, double(mesh_bytes) / 1e6,
-                    double(scene.mesh_bvh(isin::MeshId{0}).memory()) / 1e6, double(embree_mem) / 1e6,
-                    double(scene.memory()) / double(embree_mem));
+        const std::size_t mesh_bytes =
+            mesh.positions.size() * sizeof(mesh.positions[0]) + mesh.indices.size() * sizeof(mesh.indices[0]);
+        std::printf(
+            "  %-15s %8zu triangles %8zu vertices: isin %7.1f MB (mesh %.1f + Bvh %.1f), Embree %7.1f MB: %.2f×\n",
+            name.c_str(), mesh.size(), mesh.positions.size(), double(scene.memory()) / 1e6, double(mesh_bytes) / 1e6,
+            double(scene.mesh_bvh(isin::MeshId{0}).memory()) / 1e6, double(embree_mem) / 1e6,
+            double(scene.memory()) / double(embree_mem));
         rtcReleaseScene(embree);
     }
 }

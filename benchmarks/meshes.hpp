@@ -34,7 +34,9 @@ inline double uniform(std::mt19937_64& rng, double lo, double hi) {
 }
 
 template <class T>
-isin::Vertex<T> to(const V3& p) { return {T(p.x), T(p.y), T(p.z)}; }
+isin::Vertex<T> to(const V3& p) {
+    return {T(p.x), T(p.y), T(p.z)};
+}
 
 /// The triangle a, b, c, wound so that its normal points along `outside` (b and c swapped if not).
 template <class T>
@@ -161,8 +163,8 @@ std::vector<isin::Triangle<T>> random_soup(std::size_t count, std::uint64_t seed
 
 /// The meshes of the vs_embree benchmark, by name.
 inline const std::vector<std::string>& names() {
-    static const std::vector<std::string> list = {"icosphere-80k", "icosphere-1.3M", "trefoil-300k",
-                                                  "terrain-500k", "soup-200k"};
+    static const std::vector<std::string> list = {"icosphere-80k", "icosphere-1.3M", "trefoil-300k", "terrain-500k",
+                                                  "soup-200k"};
     return list;
 }
 

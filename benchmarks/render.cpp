@@ -32,10 +32,9 @@ void run(int threads, int depth, int repeats) {
     }
     std::sort(ms.begin(), ms.end());
     const double median = ms[ms.size() / 2];
-    std::printf("%-7s %7d %5d %10.1f %10.1f %10.1f %12llu %10.2f   %08x\n",
-                sizeof(T) == 4 ? "float" : "double", threads, depth, median, ms.front(), ms.back(),
-                static_cast<unsigned long long>(stats.rays()), double(stats.rays()) / median * 1e-3,
-                checksum);
+    std::printf("%-7s %7d %5d %10.1f %10.1f %10.1f %12llu %10.2f   %08x\n", sizeof(T) == 4 ? "float" : "double",
+                threads, depth, median, ms.front(), ms.back(), static_cast<unsigned long long>(stats.rays()),
+                double(stats.rays()) / median * 1e-3, checksum);
 }
 
 } // namespace
@@ -43,16 +42,17 @@ void run(int threads, int depth, int repeats) {
 int main(int argc, char** argv) {
     int repeats = 9;
     for (int i = 1; i < argc; ++i) {
-        if (std::strcmp(argv[i], "--repeats") == 0 && i + 1 < argc) repeats = std::max(1, std::atoi(argv[++i]));
+        if (std::strcmp(argv[i], "--repeats") == 0 && i + 1 < argc)
+            repeats = std::max(1, std::atoi(argv[++i]));
         else {
             std::printf("usage: render [--repeats N]\nTimes the note's scene at 800×450 (median of N renders).\n");
             return std::strcmp(argv[i], "--help") == 0 ? 0 : 2;
         }
     }
-    std::printf("note's scene, 800×450, one ray per pixel, %d renders each, %u hardware threads\n",
-                repeats, std::thread::hardware_concurrency());
-    std::printf("%-7s %7s %5s %10s %10s %10s %12s %10s   %s\n", "type", "threads", "depth",
-                "median ms", "min ms", "max ms", "rays", "Mrays/s", "checksum");
+    std::printf("note's scene, 800×450, one ray per pixel, %d renders each, %u hardware threads\n", repeats,
+                std::thread::hardware_concurrency());
+    std::printf("%-7s %7s %5s %10s %10s %10s %12s %10s   %s\n", "type", "threads", "depth", "median ms", "min ms",
+                "max ms", "rays", "Mrays/s", "checksum");
     for (int depth : {1, 4})
         for (int threads : {1, 2}) {
             run<float>(threads, depth, repeats);

@@ -95,8 +95,6 @@ double mrays(const isin::Camera<float>& camera, int stride, int repeats, F&& nea
     return median(rate);
 }
 
-
-
 } // namespace
 
 int main(int argc, char** argv) {
@@ -106,16 +104,22 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         const bool has_value = i + 1 < argc;
-        if (a == "--csv" && has_value) csv_path = argv[++i];
-        else if (a == "--repeats" && has_value) repeats = std::max(1, std::atoi(argv[++i]));
-        else if (a == "--width" && has_value) width = std::clamp(std::atoi(argv[++i]), 2, 32768);
-        else if (a == "--height" && has_value) height = std::clamp(std::atoi(argv[++i]), 2, 32768);
-        else if (a == "--brute-max" && has_value) brute_max = std::size_t(std::max(0, std::atoi(argv[++i])));
+        if (a == "--csv" && has_value)
+            csv_path = argv[++i];
+        else if (a == "--repeats" && has_value)
+            repeats = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--width" && has_value)
+            width = std::clamp(std::atoi(argv[++i]), 2, 32768);
+        else if (a == "--height" && has_value)
+            height = std::clamp(std::atoi(argv[++i]), 2, 32768);
+        else if (a == "--brute-max" && has_value)
+            brute_max = std::size_t(std::max(0, std::atoi(argv[++i])));
         else {
-            std::printf("usage: scaling [--csv FILE] [--repeats N] [--width W] [--height H] [--brute-max TRIANGLES]\n"
-                        "Mrays/s (one thread, note's camera, default 480x270 primary rays) against triangle count\n"
-                        "for brute force (watertight loop, TriangleBatch), isin's Bvh and Embree rtcIntersect1;\n"
-                        "random soups of 1..128 triangles and icospheres of levels 0..8. CSV: method,triangles,mrays.\n");
+            std::printf(
+                "usage: scaling [--csv FILE] [--repeats N] [--width W] [--height H] [--brute-max TRIANGLES]\n"
+                "Mrays/s (one thread, note's camera, default 480x270 primary rays) against triangle count\n"
+                "for brute force (watertight loop, TriangleBatch), isin's Bvh and Embree rtcIntersect1;\n"
+                "random soups of 1..128 triangles and icospheres of levels 0..8. CSV: method,triangles,mrays.\n");
             return a == "--help" || a == "-h" ? 0 : 2;
         }
     }
@@ -125,7 +129,8 @@ int main(int argc, char** argv) {
 
     std::vector<Case> cases;
     for (std::size_t n = 1; n <= 128; n *= 2)
-        cases.push_back({"soup", meshes::random_soup<float>(n, 1000 + n, std::min(25.0, 60.0 / std::sqrt(double(n))), 30, 50)});
+        cases.push_back(
+            {"soup", meshes::random_soup<float>(n, 1000 + n, std::min(25.0, 60.0 / std::sqrt(double(n))), 30, 50)});
     for (int level = 0; level <= 8; ++level) cases.push_back({"icosphere", meshes::icosphere<float>(level)});
 
     const isin::Camera<float> camera{width, height};
@@ -140,14 +145,21 @@ int main(int argc, char** argv) {
     std::FILE* csv = nullptr;
     if (!csv_path.empty()) {
         csv = std::fopen(csv_path.c_str(), "w");
-        if (!csv) { std::fprintf(stderr, "cannot open %s\n", csv_path.c_str()); return 2; }
+        if (!csv) {
+            std::fprintf(stderr, "cannot open %s\n", csv_path.c_str());
+            return 2;
+        }
         std::fprintf(csv, "method,triangles,mrays\n");
     }
     std::printf("Mrays/s, 1 thread, %dx%d primary rays of the note's camera, median of %d, FTZ/DAZ, -march=native%s\n",
                 width, height, repeats, have_embree ? "" : " (built without Embree)");
-    std::printf("%-10s %9s %8s %6s | %10s %10s %10s %10s | %s\n", "series", "triangles", "hit %", "row/k",
-                "watertight", "batch", "bvh", "embree", "check vs bvh");
-    struct Row { std::string series; std::size_t n; double m[4]; };
+    std::printf("%-10s %9s %8s %6s | %10s %10s %10s %10s | %s\n", "series", "triangles", "hit %", "row/k", "watertight",
+                "batch", "bvh", "embree", "check vs bvh");
+    struct Row {
+        std::string series;
+        std::size_t n;
+        double m[4];
+    };
     std::vector<Row> rows;
     bool ok = true;
     for (const Case& c : cases) {
@@ -171,39 +183,48 @@ int main(int argc, char** argv) {
         if (n <= brute_max) {
             stride = std::max(1, int(std::ceil(double(width) * double(height) * double(n) / 1e8)));
             const Totals ref = stride == 1 ? bvh_full : trace(camera, stride, bvh_nearest);
-            row.m[0] = mrays(camera, stride, repeats, [&](const isin::Ray<float>& ray, float& t) {
-                isin::Hit<float> best;
-                for (const Tri& tri : c.tris) {
-                    const isin::Hit<float> h = isin::intersect_watertight(ray, tri);
-                    if (h.t < best.t) best = h;
-                }
-                t = best.t;
-                return bool(best);
-            }, tot);
+            row.m[0] = mrays(
+                camera, stride, repeats,
+                [&](const isin::Ray<float>& ray, float& t) {
+                    isin::Hit<float> best;
+                    for (const Tri& tri : c.tris) {
+                        const isin::Hit<float> h = isin::intersect_watertight(ray, tri);
+                        if (h.t < best.t) best = h;
+                    }
+                    t = best.t;
+                    return bool(best);
+                },
+                tot);
             compare("watertight", tot, ref);
             const isin::TriangleBatch<float> batch{c.tris};
-            row.m[1] = mrays(camera, stride, repeats, [&](const isin::Ray<float>& ray, float& t) {
-                const isin::Hit<float> h = batch.nearest(ray);
-                t = h.t;
-                return bool(h);
-            }, tot);
+            row.m[1] = mrays(
+                camera, stride, repeats,
+                [&](const isin::Ray<float>& ray, float& t) {
+                    const isin::Hit<float> h = batch.nearest(ray);
+                    t = h.t;
+                    return bool(h);
+                },
+                tot);
             compare("batch", tot, ref);
         }
 #if ISIN_HAVE_EMBREE
         RTCScene scene = embree_scene::make(device, c.tris);
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
-        row.m[3] = mrays(camera, 1, repeats, [&](const isin::Ray<float>& ray, float& t) {
-            RTCRayHit rh;
-            rh.ray.org_x = ray.origin.x, rh.ray.org_y = ray.origin.y, rh.ray.org_z = ray.origin.z;
-            rh.ray.dir_x = ray.direction.x, rh.ray.dir_y = ray.direction.y, rh.ray.dir_z = ray.direction.z;
-            rh.ray.tnear = 0.0f, rh.ray.tfar = std::numeric_limits<float>::infinity(), rh.ray.time = 0.0f;
-            rh.ray.mask = ~0u, rh.ray.id = 0, rh.ray.flags = 0;
-            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-            rtcIntersect1(scene, &context, &rh);
-            t = rh.ray.tfar;
-            return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-        }, tot);
+        row.m[3] = mrays(
+            camera, 1, repeats,
+            [&](const isin::Ray<float>& ray, float& t) {
+                RTCRayHit rh;
+                rh.ray.org_x = ray.origin.x, rh.ray.org_y = ray.origin.y, rh.ray.org_z = ray.origin.z;
+                rh.ray.dir_x = ray.direction.x, rh.ray.dir_y = ray.direction.y, rh.ray.dir_z = ray.direction.z;
+                rh.ray.tnear = 0.0f, rh.ray.tfar = std::numeric_limits<float>::infinity(), rh.ray.time = 0.0f;
+                rh.ray.mask = ~0u, rh.ray.id = 0, rh.ray.flags = 0;
+                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                rtcIntersect1(scene, &context, &rh);
+                t = rh.ray.tfar;
+                return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            },
+            tot);
         compare("embree", tot, bvh_full);
         rtcReleaseScene(scene);
 #endif
@@ -237,12 +258,17 @@ int main(int argc, char** argv) {
             for (auto it = rows.rbegin(); it != rows.rend(); ++it) {
                 if (it->series != series || !std::isfinite(it->m[m])) continue;
                 if (!measured) largest = it->n, measured = true;
-                if (it->m[2] > it->m[m]) from = it->n;
-                else break;
+                if (it->m[2] > it->m[m])
+                    from = it->n;
+                else
+                    break;
             }
             if (!measured) continue;
-            if (from == 0) std::printf("  %-9s vs %-10s: brute force still faster at %zu triangles\n", series, methods[m], largest);
-            else std::printf("  %-9s vs %-10s: from %zu triangles\n", series, methods[m], from);
+            if (from == 0)
+                std::printf("  %-9s vs %-10s: brute force still faster at %zu triangles\n", series, methods[m],
+                            largest);
+            else
+                std::printf("  %-9s vs %-10s: from %zu triangles\n", series, methods[m], from);
         }
     if (!ok) std::printf("MISMATCH: a method's hits or sum of t differ from the bvh's by more than 1e-3\n");
     return ok ? 0 : 1;

@@ -72,9 +72,9 @@ struct Options {
     int width = 1920, height = 1080;
     std::string csv;
     std::vector<std::string> studies = studies::names(); // after the meshes (embree_studies.hpp)
-    bool build_only = false; // child mode: time the builds of one mesh with `build_threads`
+    bool build_only = false;                             // child mode: time the builds of one mesh with `build_threads`
     int build_threads = 1;
-    std::string self;        // this program, re-executed for the build times
+    std::string self; // this program, re-executed for the build times
 };
 
 void set_fp_mode() { // Embree's recommendation for every thread that calls it
@@ -221,17 +221,19 @@ struct Bench {
                 for (int k = 0; k < 16; ++k) {
                     const int x = x0 + k % 4, y = 4 * band + k / 4;
                     valid[k] = x < opt.width && y < opt.height ? -1 : 0;
-                    const isin::Ray<float> ray = camera.primary_ray(float(std::min(x, opt.width - 1)),
-                                                                    float(std::min(y, opt.height - 1)));
+                    const isin::Ray<float> ray =
+                        camera.primary_ray(float(std::min(x, opt.width - 1)), float(std::min(y, opt.height - 1)));
                     rh.ray.org_x[k] = ray.origin.x, rh.ray.org_y[k] = ray.origin.y, rh.ray.org_z[k] = ray.origin.z;
-                    rh.ray.dir_x[k] = ray.direction.x, rh.ray.dir_y[k] = ray.direction.y, rh.ray.dir_z[k] = ray.direction.z;
+                    rh.ray.dir_x[k] = ray.direction.x, rh.ray.dir_y[k] = ray.direction.y,
+                    rh.ray.dir_z[k] = ray.direction.z;
                     rh.ray.tnear[k] = 0.0f, rh.ray.tfar[k] = inf, rh.ray.time[k] = 0.0f;
                     rh.ray.mask[k] = ~0u, rh.ray.id[k] = 0, rh.ray.flags[k] = 0;
                     rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
                 }
                 rtcIntersect16(valid, scene, &context, &rh);
                 for (int k = 0; k < 16; ++k)
-                    if (valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) ++acc.hits, acc.sum_t += double(rh.ray.tfar[k]);
+                    if (valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID)
+                        ++acc.hits, acc.sum_t += double(rh.ray.tfar[k]);
             }
             out = acc;
         });
@@ -312,7 +314,8 @@ BuildTimes child_build(const Options& opt, const std::string& mesh, int threads)
     char line[512];
     while (std::fgets(line, sizeof line, pipe)) {
         unsigned long long check = 0;
-        if (std::sscanf(line, "BUILD %lf %lf %lf %lf %llu", &b.isin_ms, &b.isin_cpu, &b.embree_ms, &b.embree_cpu, &check) != 5)
+        if (std::sscanf(line, "BUILD %lf %lf %lf %lf %llu", &b.isin_ms, &b.isin_cpu, &b.embree_ms, &b.embree_cpu,
+                        &check) != 5)
             std::fputs(line, stderr);
     }
     if (pclose(pipe) != 0) std::fprintf(stderr, "build child failed: %s\n", command.c_str());
@@ -335,7 +338,8 @@ std::vector<int> parse_list(const char* s) {
 }
 
 void usage(FILE* f) {
-    std::fprintf(f,
+    std::fprintf(
+        f,
         "usage: vs_embree [--mesh NAME|none] [--repeats N] [--threads-list 1,2] [--width W] [--height H] [--csv FILE]\n"
         "                 [--studies all|none|spheres,instances,transparency,refit,groups,memory]\n"
         "isin's Bvh<float> against Embree %d.%d.%d (RTC_BUILD_QUALITY_MEDIUM) on the same triangles and rays:\n"
@@ -344,10 +348,11 @@ void usage(FILE* f) {
         "rtcOccluded1); medians of N runs (default 5). Meshes:",
         RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH);
     for (const auto& m : meshes::names()) std::fprintf(f, " %s", m.c_str());
-    std::fprintf(f, "\n--csv appends one row per mesh and thread count. Then the scene studies of\n"
-                    "benchmarks/embree_studies.hpp (at half the width and height): spheres against Embree's points and\n"
-                    "user geometry, instances, transparent shadows, refit, a mesh in 20 groups, memory. Exit status 1\n"
-                    "when the libraries' hit counts or sums of t differ by more than 1e-5 (relative).\n");
+    std::fprintf(f,
+                 "\n--csv appends one row per mesh and thread count. Then the scene studies of\n"
+                 "benchmarks/embree_studies.hpp (at half the width and height): spheres against Embree's points and\n"
+                 "user geometry, instances, transparent shadows, refit, a mesh in 20 groups, memory. Exit status 1\n"
+                 "when the libraries' hit counts or sums of t differ by more than 1e-5 (relative).\n");
 }
 
 int run(const Options& opt) {
@@ -355,7 +360,10 @@ int run(const Options& opt) {
     std::FILE* csv = nullptr;
     if (!opt.csv.empty()) {
         csv = std::fopen(opt.csv.c_str(), "a");
-        if (!csv) { std::fprintf(stderr, "cannot open %s\n", opt.csv.c_str()); return 2; }
+        if (!csv) {
+            std::fprintf(stderr, "cannot open %s\n", opt.csv.c_str());
+            return 2;
+        }
         if (std::ftell(csv) == 0)
             std::fprintf(csv, "mesh,triangles,threads,build_isin_ms,build_embree_ms,isin_mrays,embree1_mrays,"
                               "embree16_mrays,isin_over_embree1,shadow_isin_mrays,shadow_embree1_mrays,"
@@ -365,10 +373,10 @@ int run(const Options& opt) {
                 "median of %d, %u hardware threads, FTZ/DAZ on in every tracing thread, -march=native\n",
                 RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, opt.width, opt.height, opt.repeats,
                 std::thread::hardware_concurrency());
-    std::printf("%-15s %9s %3s | %8s %8s | %6s %6s %6s %6s | %7s %6s %6s %6s\n", "", "", "", "build ms", "",
-                "primary", "Mray/s", "", "", "shadow", "Mray/s", "", "");
-    std::printf("%-15s %9s %3s | %8s %8s | %6s %6s %6s %6s | %7s %6s %6s %6s\n", "mesh", "triangles", "thr",
-                "isin", "Embree", "isin", "E-1", "E-16", "isin/1", "rays", "isin", "E-1", "isin/1");
+    std::printf("%-15s %9s %3s | %8s %8s | %6s %6s %6s %6s | %7s %6s %6s %6s\n", "", "", "", "build ms", "", "primary",
+                "Mray/s", "", "", "shadow", "Mray/s", "", "");
+    std::printf("%-15s %9s %3s | %8s %8s | %6s %6s %6s %6s | %7s %6s %6s %6s\n", "mesh", "triangles", "thr", "isin",
+                "Embree", "isin", "E-1", "E-16", "isin/1", "rays", "isin", "E-1", "isin/1");
     bool all_ok = true;
     RTCDevice device = new_device(0);
     rtcSetDeviceMemoryMonitorFunction(device, studies::embree_monitor, nullptr);
@@ -418,7 +426,8 @@ int run(const Options& opt) {
                 for (int m = 0; m < 2; ++m) shadow_ref[m] = tot[3 + m];
             }
             // Results must not depend on the thread count.
-            for (int m = 0; m < 3; ++m) ok = ok && tot[m].hits == ref[m].hits && relative(tot[m].sum_t, ref[m].sum_t) < 1e-12;
+            for (int m = 0; m < 3; ++m)
+                ok = ok && tot[m].hits == ref[m].hits && relative(tot[m].sum_t, ref[m].sum_t) < 1e-12;
             for (int m = 0; m < 2; ++m) ok = ok && tot[3 + m].hits == shadow_ref[m].hits;
         }
         // Embree's robust (watertight) mode, traced once, untimed: where Embree's default test
@@ -435,13 +444,15 @@ int run(const Options& opt) {
         const bool shadow_ok = relative(double(shadow_ref[0].hits), double(shadow_ref[1].hits)) <= tolerance;
         ok = ok && primary_ok && shadow_ok;
         all_ok = all_ok && ok;
-        std::printf("  %s %s: hits isin %llu E-1 %llu E-16 %llu E-robust %llu (%.1f%% of rays); sum t isin %.9g E-1 %.9g"
-                    " E-16 %.9g E-robust %.9g; occluded isin %llu E-1 %llu E-robust %llu\n", ok ? "OK" : "MISMATCH",
-                    name.c_str(), static_cast<unsigned long long>(ref[0].hits), static_cast<unsigned long long>(ref[1].hits),
-                    static_cast<unsigned long long>(ref[2].hits), static_cast<unsigned long long>(robust_primary.hits),
-                    100.0 * double(ref[0].hits) / (double(opt.width) * double(opt.height)), ref[0].sum_t, ref[1].sum_t,
-                    ref[2].sum_t, robust_primary.sum_t, static_cast<unsigned long long>(shadow_ref[0].hits),
-                    static_cast<unsigned long long>(shadow_ref[1].hits), static_cast<unsigned long long>(robust_shadow.hits));
+        std::printf(
+            "  %s %s: hits isin %llu E-1 %llu E-16 %llu E-robust %llu (%.1f%% of rays); sum t isin %.9g E-1 %.9g"
+            " E-16 %.9g E-robust %.9g; occluded isin %llu E-1 %llu E-robust %llu\n",
+            ok ? "OK" : "MISMATCH", name.c_str(), static_cast<unsigned long long>(ref[0].hits),
+            static_cast<unsigned long long>(ref[1].hits), static_cast<unsigned long long>(ref[2].hits),
+            static_cast<unsigned long long>(robust_primary.hits),
+            100.0 * double(ref[0].hits) / (double(opt.width) * double(opt.height)), ref[0].sum_t, ref[1].sum_t,
+            ref[2].sum_t, robust_primary.sum_t, static_cast<unsigned long long>(shadow_ref[0].hits),
+            static_cast<unsigned long long>(shadow_ref[1].hits), static_cast<unsigned long long>(robust_shadow.hits));
         std::printf("  builds (child process each):");
         for (std::size_t ti = 0; ti < opt.threads.size(); ++ti)
             std::printf(" %d thr: isin %.1f ms (cpu/wall %.2f), Embree %.1f ms (cpu/wall %.2f);", opt.threads[ti],
@@ -470,15 +481,18 @@ int main(int argc, char** argv) {
                 if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
                 return argv[++i];
             };
-            if (a == "--help" || a == "-h") { usage(stdout); return 0; }
-            else if (a == "--mesh") {
+            if (a == "--help" || a == "-h") {
+                usage(stdout);
+                return 0;
+            } else if (a == "--mesh") {
                 const std::string m = value();
-                if (m == "none") opt.meshes.clear();
+                if (m == "none")
+                    opt.meshes.clear();
                 else if (std::find(meshes::names().begin(), meshes::names().end(), m) == meshes::names().end())
                     throw std::invalid_argument("unknown mesh '" + m + "'");
-                else opt.meshes = {m};
-            }
-            else if (a == "--studies") {
+                else
+                    opt.meshes = {m};
+            } else if (a == "--studies") {
                 const std::string list = value();
                 opt.studies.clear();
                 if (list == "all") opt.studies = studies::names();
@@ -490,15 +504,22 @@ int main(int argc, char** argv) {
                     opt.studies.push_back(name);
                     b = e + 1;
                 }
-            }
-            else if (a == "--repeats") opt.repeats = std::max(1, std::atoi(value()));
-            else if (a == "--threads-list") opt.threads = parse_list(value());
-            else if (a == "--width") opt.width = std::atoi(value());
-            else if (a == "--height") opt.height = std::atoi(value());
-            else if (a == "--csv") opt.csv = value();
-            else if (a == "--build-only") opt.build_only = true;
-            else if (a == "--threads") opt.build_threads = std::max(1, std::atoi(value()));
-            else throw std::invalid_argument("unknown option " + a);
+            } else if (a == "--repeats")
+                opt.repeats = std::max(1, std::atoi(value()));
+            else if (a == "--threads-list")
+                opt.threads = parse_list(value());
+            else if (a == "--width")
+                opt.width = std::atoi(value());
+            else if (a == "--height")
+                opt.height = std::atoi(value());
+            else if (a == "--csv")
+                opt.csv = value();
+            else if (a == "--build-only")
+                opt.build_only = true;
+            else if (a == "--threads")
+                opt.build_threads = std::max(1, std::atoi(value()));
+            else
+                throw std::invalid_argument("unknown option " + a);
         }
         if (opt.threads.empty()) throw std::invalid_argument("empty --threads-list");
         if (opt.width < 2 || opt.height < 2 || opt.width > isin::Camera<float>::max_side ||

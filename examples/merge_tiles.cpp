@@ -12,11 +12,10 @@
 #include "options.hpp"
 
 int main(int argc, char** argv) {
-    const char* usage =
-        "usage: merge_tiles OUTPUT TILE_0 TILE_1 ... [--height H]\n"
-        "Writes the tiles (PNG or PPM bands of rows of equal width, band 0 first, as --tile 0/N,\n"
-        "1/N, ... wrote them) one above the other to OUTPUT (.png or .ppm). With --height H it\n"
-        "fails unless the bands add up to H rows (a missing or repeated band).\n";
+    const char* usage = "usage: merge_tiles OUTPUT TILE_0 TILE_1 ... [--height H]\n"
+                        "Writes the tiles (PNG or PPM bands of rows of equal width, band 0 first, as --tile 0/N,\n"
+                        "1/N, ... wrote them) one above the other to OUTPUT (.png or .ppm). With --height H it\n"
+                        "fails unless the bands add up to H rows (a missing or repeated band).\n";
     std::vector<std::string> paths;
     int expected_height = 0;
     for (int i = 1; i < argc; ++i) {
@@ -24,9 +23,12 @@ int main(int argc, char** argv) {
         if (a == "--help" || a == "-h") {
             std::fputs(usage, stdout);
             return 0;
-        } else if (a == "--height") expected_height = example::integer_option(i, argc, argv, 1, 32768, usage);
-        else if (a.size() > 1 && a[0] == '-') example::fail(argv[0], "unknown option '" + a + "'", usage);
-        else paths.push_back(a);
+        } else if (a == "--height")
+            expected_height = example::integer_option(i, argc, argv, 1, 32768, usage);
+        else if (a.size() > 1 && a[0] == '-')
+            example::fail(argv[0], "unknown option '" + a + "'", usage);
+        else
+            paths.push_back(a);
     }
     if (paths.size() < 2) example::fail(argv[0], "needs an output and at least one tile", usage);
     try {

@@ -18,17 +18,16 @@ namespace {
 
 constexpr int orbit_frames = 120; // one turn around the mesh: 120 frames, 3° each
 
-const char* usage =
-    "usage: mesh_view MESH.obj|MESH.ply [--output mesh_view.png] [--width 800] [--height 450]\n"
-    "                 [--threads N] [--samples N] [--cull none|dot|projected] [--frames A..B]\n"
-    "                 [--tile I/N]\n"
-    "Renders the mesh with Phong shading, two lights with shadows and a floor; the camera (the\n"
-    "note's pinhole: a 16×9 plane at distance 10) is placed to frame the whole mesh. The mesh\n"
-    "is traced through a BVH. --cull drops backfaces from primary rays. --frames A..B renders\n"
-    "frames A to B of an orbit around the mesh (3° a frame, 120 a turn; frame 0 is the still\n"
-    "picture), each to OUTPUT with its number: a %d or %04d in it is replaced, else _NNNN goes\n"
-    "before the extension. --tile I/N renders band I (from 0) of N bands of rows only, exactly\n"
-    "those rows of the whole picture: merge_tiles stacks them.\n";
+const char* usage = "usage: mesh_view MESH.obj|MESH.ply [--output mesh_view.png] [--width 800] [--height 450]\n"
+                    "                 [--threads N] [--samples N] [--cull none|dot|projected] [--frames A..B]\n"
+                    "                 [--tile I/N]\n"
+                    "Renders the mesh with Phong shading, two lights with shadows and a floor; the camera (the\n"
+                    "note's pinhole: a 16×9 plane at distance 10) is placed to frame the whole mesh. The mesh\n"
+                    "is traced through a BVH. --cull drops backfaces from primary rays. --frames A..B renders\n"
+                    "frames A to B of an orbit around the mesh (3° a frame, 120 a turn; frame 0 is the still\n"
+                    "picture), each to OUTPUT with its number: a %d or %04d in it is replaced, else _NNNN goes\n"
+                    "before the extension. --tile I/N renders band I (from 0) of N bands of rows only, exactly\n"
+                    "those rows of the whole picture: merge_tiles stacks them.\n";
 
 [[noreturn]] void fail(const std::string& why) { example::fail("mesh_view", why, usage); }
 
@@ -44,13 +43,20 @@ int main(int argc, char** argv) {
         if (example::common_option(i, argc, argv, o, usage)) continue;
         if (a == "--cull") {
             const std::string c = example::string_option(i, argc, argv, usage);
-            if (c == "none") opt.culling = isin::Culling::none;
-            else if (c == "dot") opt.culling = isin::Culling::dot_product;
-            else if (c == "projected") opt.culling = isin::Culling::projected;
-            else fail("--cull takes none, dot or projected");
-        } else if (!a.empty() && a[0] == '-') fail("unknown option '" + a + "'");
-        else if (mesh_path.empty()) mesh_path = a;
-        else fail("one mesh at a time");
+            if (c == "none")
+                opt.culling = isin::Culling::none;
+            else if (c == "dot")
+                opt.culling = isin::Culling::dot_product;
+            else if (c == "projected")
+                opt.culling = isin::Culling::projected;
+            else
+                fail("--cull takes none, dot or projected");
+        } else if (!a.empty() && a[0] == '-')
+            fail("unknown option '" + a + "'");
+        else if (mesh_path.empty())
+            mesh_path = a;
+        else
+            fail("one mesh at a time");
     }
     if (mesh_path.empty()) fail("no mesh given");
     example::finish(o, argv[0], usage, 1000000);

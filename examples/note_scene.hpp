@@ -43,11 +43,10 @@ Scene<T> make(bool textured_floor = true) {
     floor.color = isin::from_rgb8<T>(220, 220, 220);
     floor.ka = T(0.2), floor.kd = T(0.7), floor.ks = T(0.1), floor.shininess = T(10);
     if (textured_floor)
-        floor.texture = scene.add_texture(isin::Checkerboard<T>{isin::from_rgb8<T>(235, 235, 225),
-                                                                isin::from_rgb8<T>(60, 70, 90), 40, 16});
+        floor.texture = scene.add_texture(
+            isin::Checkerboard<T>{isin::from_rgb8<T>(235, 235, 225), isin::from_rgb8<T>(60, 70, 90), 40, 16});
     // §10: two right triangles, V0 at the right angle; the front face looks up (+Y).
-    scene.add_textured_rectangle({-200, -45, 20}, {-200, -45, 1000}, {200, -45, 20},
-                                 scene.add_material(floor));
+    scene.add_textured_rectangle({-200, -45, 20}, {-200, -45, 1000}, {200, -45, 20}, scene.add_material(floor));
 
     // §9: both cast shadows: one high above, one low in front (it lights red U, which faces down).
     scene.add_light({{-60, 150, 40}, {T(0.75), T(0.75), T(0.72)}});

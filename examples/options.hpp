@@ -32,8 +32,9 @@ inline int to_integer(const std::string& text, const std::string& option, int lo
     char* end = nullptr;
     const long v = std::strtol(text.c_str(), &end, 10);
     if (text.empty() || *end != '\0' || v < lo || v > hi)
-        fail(program, option + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                          "], got '" + text + "'",
+        fail(program,
+             option + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + text +
+                 "'",
              usage);
     return int(v);
 }
@@ -111,7 +112,8 @@ inline std::string frame_path(const std::string& pattern, int frame) {
     }
     std::snprintf(number, sizeof number, "_%04d", frame);
     const std::size_t slash = pattern.find_last_of('/'), dot = pattern.find_last_of('.');
-    const std::size_t at = dot != std::string::npos && (slash == std::string::npos || dot > slash) ? dot : pattern.size();
+    const std::size_t at =
+        dot != std::string::npos && (slash == std::string::npos || dot > slash) ? dot : pattern.size();
     return pattern.substr(0, at) + number + pattern.substr(at);
 }
 
@@ -131,14 +133,22 @@ inline bool common_option(int& i, int argc, char** argv, Options& o, const char*
     if (a == "--help" || a == "-h") {
         std::fputs(usage, stdout);
         std::exit(0);
-    } else if (a == "--width") o.width = integer_option(i, argc, argv, 2, 32768, usage);
-    else if (a == "--height") o.height = integer_option(i, argc, argv, 2, 32768, usage);
-    else if (a == "--threads") o.threads = integer_option(i, argc, argv, 0, 1024, usage);
-    else if (a == "--samples") o.samples = integer_option(i, argc, argv, 1, 16, usage);
-    else if (a == "--output" || a == "-o") o.output = string_option(i, argc, argv, usage);
-    else if (pieces && a == "--tile") o.tile_text = string_option(i, argc, argv, usage);
-    else if (pieces && a == "--frames") o.frames_text = string_option(i, argc, argv, usage);
-    else return false;
+    } else if (a == "--width")
+        o.width = integer_option(i, argc, argv, 2, 32768, usage);
+    else if (a == "--height")
+        o.height = integer_option(i, argc, argv, 2, 32768, usage);
+    else if (a == "--threads")
+        o.threads = integer_option(i, argc, argv, 0, 1024, usage);
+    else if (a == "--samples")
+        o.samples = integer_option(i, argc, argv, 1, 16, usage);
+    else if (a == "--output" || a == "-o")
+        o.output = string_option(i, argc, argv, usage);
+    else if (pieces && a == "--tile")
+        o.tile_text = string_option(i, argc, argv, usage);
+    else if (pieces && a == "--frames")
+        o.frames_text = string_option(i, argc, argv, usage);
+    else
+        return false;
     return true;
 }
 

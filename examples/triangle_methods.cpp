@@ -9,11 +9,10 @@
 #include "options.hpp"
 
 int main(int argc, char** argv) {
-    const char* usage =
-        "usage: triangle_methods [--width 800] [--height 450] [--output triangle_methods.png]\n"
-        "                        [--threads N]\n"
-        "Renders the note's scene with the area test (left) and Möller–Trumbore (right) into one\n"
-        "(2·width)×height image and prints the number of pixels that differ, and by how much.\n";
+    const char* usage = "usage: triangle_methods [--width 800] [--height 450] [--output triangle_methods.png]\n"
+                        "                        [--threads N]\n"
+                        "Renders the note's scene with the area test (left) and Möller–Trumbore (right) into one\n"
+                        "(2·width)×height image and prints the number of pixels that differ, and by how much.\n";
     const auto o = example::parse(argc, argv, usage, "triangle_methods.png", -1, 2); // writes (2·width)×height
     try {
         auto scene = note_scene::make<float>();
@@ -41,10 +40,9 @@ int main(int argc, char** argv) {
         isin::write_image(both, o.output);
         const double pixels = double(o.width) * o.height;
         std::printf("%s: area test %.1f ms, Möller–Trumbore %.1f ms (ratio %.2f)\n", o.output.c_str(),
-                    area_stats.seconds * 1e3, mt_stats.seconds * 1e3,
-                    area_stats.seconds / mt_stats.seconds);
-        std::printf("pixels that differ: %ld of %.0f (%.4f%%); by more than 2 levels a channel: %ld\n",
-                    differ, pixels, 100.0 * double(differ) / pixels, differ_more);
+                    area_stats.seconds * 1e3, mt_stats.seconds * 1e3, area_stats.seconds / mt_stats.seconds);
+        std::printf("pixels that differ: %ld of %.0f (%.4f%%); by more than 2 levels a channel: %ld\n", differ, pixels,
+                    100.0 * double(differ) / pixels, differ_more);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "triangle_methods: %s\n", e.what());
         return 1;

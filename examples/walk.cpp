@@ -27,35 +27,44 @@ namespace {
 constexpr float move_step = 4.0f;                        // units per W/A/S/D
 constexpr float turn_step = 5.0f * 3.14159265f / 180.0f; // 5° per turn key
 
-const char* usage =
-    "usage: walk                                  interactive, in a terminal\n"
-    "       walk --script KEYS [--output last.png] [--frames DIR] [--width 320] [--height 180]\n"
-    "       walk --script KEYS --frames A..B [--output walk_%04d.png] [--tile I/N] [...]\n"
-    "       walk --benchmark [--width 160] [--height 180] [--frames N]\n"
-    "       common: [--threads N] [--help]\n"
-    "Walks through the note's scene (§12). Keys: W/A/S/D move, J/L (or ←/→) turn, I/K (or ↑/↓)\n"
-    "look up/down, P writes the view to walk_N.png, Q quits. --script replays KEYS (the same\n"
-    "letters; unknown characters are ignored) headlessly, writes the last frame to --output and,\n"
-    "with --frames DIR, every frame to DIR/frame_K.png; it prints the final pose. Frame 0 is the\n"
-    "start, frame K the view after the K-th key that moves: --frames A..B renders only frames A\n"
-    "to B, each to OUTPUT with its number (a %d or %04d in it is replaced, else _NNNN goes before\n"
-    "the extension). --tile I/N renders band I (from 0) of N bands of rows only (merge_tiles\n"
-    "stacks them). --benchmark renders --frames frames (default 60) while walking and prints\n"
-    "frames per second.\n";
+const char* usage = "usage: walk                                  interactive, in a terminal\n"
+                    "       walk --script KEYS [--output last.png] [--frames DIR] [--width 320] [--height 180]\n"
+                    "       walk --script KEYS --frames A..B [--output walk_%04d.png] [--tile I/N] [...]\n"
+                    "       walk --benchmark [--width 160] [--height 180] [--frames N]\n"
+                    "       common: [--threads N] [--help]\n"
+                    "Walks through the note's scene (§12). Keys: W/A/S/D move, J/L (or ←/→) turn, I/K (or ↑/↓)\n"
+                    "look up/down, P writes the view to walk_N.png, Q quits. --script replays KEYS (the same\n"
+                    "letters; unknown characters are ignored) headlessly, writes the last frame to --output and,\n"
+                    "with --frames DIR, every frame to DIR/frame_K.png; it prints the final pose. Frame 0 is the\n"
+                    "start, frame K the view after the K-th key that moves: --frames A..B renders only frames A\n"
+                    "to B, each to OUTPUT with its number (a %d or %04d in it is replaced, else _NNNN goes before\n"
+                    "the extension). --tile I/N renders band I (from 0) of N bands of rows only (merge_tiles\n"
+                    "stacks them). --benchmark renders --frames frames (default 60) while walking and prints\n"
+                    "frames per second.\n";
 
 // Applies one key to the camera; returns false for keys that do nothing.
 bool apply_key(char key, isin::Camera<float>& cam) {
+    // clang-format off: one line per key
     switch (key) {
-    case 'w': case 'W': cam.move_forward(move_step); return true;
-    case 's': case 'S': cam.move_backward(move_step); return true;
-    case 'a': case 'A': cam.move_left(move_step); return true;
-    case 'd': case 'D': cam.move_right(move_step); return true;
-    case 'j': case 'J': cam.turn(-turn_step); return true;
-    case 'l': case 'L': cam.turn(turn_step); return true;
-    case 'i': case 'I': cam.turn(0.0f, turn_step); return true;
-    case 'k': case 'K': cam.turn(0.0f, -turn_step); return true;
+    case 'w':
+    case 'W': cam.move_forward(move_step); return true;
+    case 's':
+    case 'S': cam.move_backward(move_step); return true;
+    case 'a':
+    case 'A': cam.move_left(move_step); return true;
+    case 'd':
+    case 'D': cam.move_right(move_step); return true;
+    case 'j':
+    case 'J': cam.turn(-turn_step); return true;
+    case 'l':
+    case 'L': cam.turn(turn_step); return true;
+    case 'i':
+    case 'I': cam.turn(0.0f, turn_step); return true;
+    case 'k':
+    case 'K': cam.turn(0.0f, -turn_step); return true;
     default: return false;
     }
+    // clang-format on
 }
 
 // The same pose at another resolution (the plane stays the note's 16×9 at distance 10).
@@ -175,10 +184,11 @@ int interactive(const note_scene::Scene<float>& scene, isin::RenderOptions opt) 
             isin::RenderStats stats;
             const isin::Image image = isin::render(scene, view, opt, &stats);
             char status[256];
-            std::snprintf(status, sizeof status,
-                          " %s %.1f ms, %.1f Mrays/s | pos %.0f %.0f %.0f | WASD move, ←→ turn, ↑↓ look, P png, Q quit %s",
-                          moving ? "coarse" : "full  ", stats.seconds * 1e3, stats.mrays_per_second(),
-                          double(cam.position().x), double(cam.position().y), double(cam.position().z), note.c_str());
+            std::snprintf(
+                status, sizeof status,
+                " %s %.1f ms, %.1f Mrays/s | pos %.0f %.0f %.0f | WASD move, ←→ turn, ↑↓ look, P png, Q quit %s",
+                moving ? "coarse" : "full  ", stats.seconds * 1e3, stats.mrays_per_second(), double(cam.position().x),
+                double(cam.position().y), double(cam.position().z), note.c_str());
             draw(image, scale, status);
             dirty = moving; // after a coarse frame, draw the full one once the camera stops
             moving = false;
@@ -221,15 +231,24 @@ int main(int argc, char** argv) {
         if (a == "--help" || a == "-h") {
             std::fputs(usage, stdout);
             return 0;
-        } else if (a == "--script") script = example::string_option(i, argc, argv, usage), scripted = true;
-        else if (a == "--output" || a == "-o") output = example::string_option(i, argc, argv, usage), output_given = true;
-        else if (a == "--frames") frames_value = example::string_option(i, argc, argv, usage);
-        else if (a == "--tile") tile_text = example::string_option(i, argc, argv, usage);
-        else if (a == "--width") width = example::integer_option(i, argc, argv, 2, 8192, usage);
-        else if (a == "--height") height = example::integer_option(i, argc, argv, 2, 8192, usage);
-        else if (a == "--threads") opt.threads = example::integer_option(i, argc, argv, 0, 1024, usage);
-        else if (a == "--benchmark") benchmark = true;
-        else fail("unknown option '" + a + "'");
+        } else if (a == "--script")
+            script = example::string_option(i, argc, argv, usage), scripted = true;
+        else if (a == "--output" || a == "-o")
+            output = example::string_option(i, argc, argv, usage), output_given = true;
+        else if (a == "--frames")
+            frames_value = example::string_option(i, argc, argv, usage);
+        else if (a == "--tile")
+            tile_text = example::string_option(i, argc, argv, usage);
+        else if (a == "--width")
+            width = example::integer_option(i, argc, argv, 2, 8192, usage);
+        else if (a == "--height")
+            height = example::integer_option(i, argc, argv, 2, 8192, usage);
+        else if (a == "--threads")
+            opt.threads = example::integer_option(i, argc, argv, 0, 1024, usage);
+        else if (a == "--benchmark")
+            benchmark = true;
+        else
+            fail("unknown option '" + a + "'");
     }
     // Read once every option is known, whatever their order.
     if (benchmark) {
@@ -253,8 +272,8 @@ int main(int argc, char** argv) {
             frames_dir = frames_value;
         }
         const int rows = isin::row_band(start.height(), tile.index, tile.count).rows;
-        example::check_output("walk", range.given() ? example::frame_path(output, range.first) : output,
-                              start.width(), rows, usage);
+        example::check_output("walk", range.given() ? example::frame_path(output, range.first) : output, start.width(),
+                              rows, usage);
     }
     const auto scene = note_scene::make<float>();
     try {
@@ -277,7 +296,9 @@ int main(int argc, char** argv) {
         }
         if (scripted) {
             const isin::RowBand band = isin::row_band(start.height(), tile.index, tile.count);
-            auto frame_image = [&](std::size_t f) { return isin::render_rows(scene, poses[f], band.first, band.rows, opt); };
+            auto frame_image = [&](std::size_t f) {
+                return isin::render_rows(scene, poses[f], band.first, band.rows, opt);
+            };
             if (range.given()) {
                 for (int f = range.first; f <= range.last; ++f) {
                     const std::string path = example::frame_path(output, f);

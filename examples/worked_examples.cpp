@@ -15,8 +15,14 @@ void label_column(const char* label) {
     for (const char* c = label; *c; ++c) columns += (static_cast<unsigned char>(*c) & 0xC0) != 0x80;
     std::printf("  %s%*s", label, columns < 32 ? 32 - columns : 0, "");
 }
-void print(const char* label, const V& v) { label_column(label); std::printf("(%g, %g, %g)\n", v.x, v.y, v.z); }
-void print(const char* label, double s) { label_column(label); std::printf("%g\n", s); }
+void print(const char* label, const V& v) {
+    label_column(label);
+    std::printf("(%g, %g, %g)\n", v.x, v.y, v.z);
+}
+void print(const char* label, double s) {
+    label_column(label);
+    std::printf("%g\n", s);
+}
 
 template <class Intersect>
 void nearest_of_5a(const char* method, Intersect intersect) {
@@ -77,8 +83,9 @@ int main(int argc, char** argv) {
     std::printf("§5 example 5a\n");
     nearest_of_5a("area test (ε = 0.005)",
                   [](const isin::Rayd& r, const isin::Triangled& tr) { return isin::intersect_area(r, tr, 0.005); });
-    nearest_of_5a("Möller–Trumbore     ",
-                  [](const isin::Rayd& r, const isin::Triangled& tr) { return isin::intersect_moller_trumbore(r, tr); });
+    nearest_of_5a("Möller–Trumbore     ", [](const isin::Rayd& r, const isin::Triangled& tr) {
+        return isin::intersect_moller_trumbore(r, tr);
+    });
 
     std::printf("§6 ray–sphere (centre (0,0,50), r = 5)\n");
     const isin::Sphered sp{{0, 0, 50}, 5};

@@ -29,13 +29,14 @@ TEST_CASE_TEMPLATE("Baldwin–Weber: the transform maps V0, V1, V2 to (u, v, w) 
     CHECK_FALSE(isin::intersect_baldwin_weber(isin::Ray<T>{{1, 1, 0}, {0, 0, 1}}, flat));
 }
 
-TEST_CASE_TEMPLATE("Baldwin–Weber §4/§5: example 4a hits at t = 90, example 5a's nearest is blue Z at 77", T, float, double) {
+TEST_CASE_TEMPLATE("Baldwin–Weber §4/§5: example 4a hits at t = 90, example 5a's nearest is blue Z at 77", T, float,
+                   double) {
     const isin::Ray<T> ray{{0, 0, 0}, {0, 0, 1}};
     const auto h = isin::intersect_baldwin_weber(ray, isin::Triangle<T>{{0, 40, 120}, {30, -40, 60}, {-30, -40, 60}});
     REQUIRE(h);
     CHECK(h.t == approx(90));
-    const isin::Triangle<T> U{{0, 30, 40}, {40, -30, 120}, {-40, -30, 120}}, Y{{-50, 30, 124}, {50, 30, 124}, {0, -30, 44}},
-        Z{{-30, 0, 37}, {30, 40, 117}, {30, -40, 117}};
+    const isin::Triangle<T> U{{0, 30, 40}, {40, -30, 120}, {-40, -30, 120}},
+        Y{{-50, 30, 124}, {50, 30, 124}, {0, -30, 44}}, Z{{-30, 0, 37}, {30, 40, 117}, {30, -40, 117}};
     CHECK(isin::intersect_baldwin_weber(ray, U).t == approx(80));
     CHECK(isin::intersect_baldwin_weber(ray, Y).t == approx(84));
     CHECK(isin::intersect_baldwin_weber(ray, Z).t == approx(77));

@@ -10,8 +10,7 @@
 #include <random>
 #include <vector>
 
-TEST_CASE_TEMPLATE("§10 TriangleBatch: same nearest hit, u, v as scalar Möller–Trumbore", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§10 TriangleBatch: same nearest hit, u, v as scalar Möller–Trumbore", T, float, double) {
     std::mt19937 rng(42);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     for (std::size_t n : {std::size_t(1), std::size_t(5), std::size_t(16), std::size_t(17), std::size_t(100)}) {
@@ -55,10 +54,16 @@ TEST_CASE_TEMPLATE("TriangleBatch: t_max, each_hit, bad rays", T, float, double)
     CHECK(batch.nearest(ray).t == approx(10));
     CHECK_FALSE(batch.nearest(ray, T(5)));
     std::vector<std::size_t> seen;
-    batch.each_hit(ray, T(100), [&](std::size_t i, T) { seen.push_back(i); return true; });
+    batch.each_hit(ray, T(100), [&](std::size_t i, T) {
+        seen.push_back(i);
+        return true;
+    });
     CHECK(seen == std::vector<std::size_t>{0, 1});
     seen.clear();
-    batch.each_hit(ray, T(100), [&](std::size_t i, T) { seen.push_back(i); return false; });
+    batch.each_hit(ray, T(100), [&](std::size_t i, T) {
+        seen.push_back(i);
+        return false;
+    });
     CHECK(seen.size() == 1);
     const T nan = std::numeric_limits<T>::quiet_NaN();
     CHECK_FALSE(batch.nearest(isin::Ray<T>{{nan, 0, 0}, {0, 0, 1}}));
@@ -74,7 +79,8 @@ TEST_CASE_TEMPLATE("scene: batch and one-by-one triangle loops find the same hit
     for (int i = 0; i < 40; ++i) {
         const isin::Vertex<T> c{T(uni(rng) * 8), T(uni(rng) * 4.5), T(20 + uni(rng) * 5)};
         scene.add(isin::Triangle<T>{c, c + isin::Vertex<T>{T(uni(rng)), T(uni(rng)), 0},
-                                    c + isin::Vertex<T>{T(uni(rng)), T(uni(rng)), T(uni(rng))}}, m);
+                                    c + isin::Vertex<T>{T(uni(rng)), T(uni(rng)), T(uni(rng))}},
+                  m);
     }
     scene.commit(); // 40 ≥ batch_min: the batch
     REQUIRE_FALSE(scene.template has_bvh<isin::Triangle<T>>());

@@ -64,7 +64,7 @@ namespace {
 
 template <class T>
 isin::Hit<T> brute_force(const std::vector<isin::Triangle<T>>& tris, const isin::Ray<T>& ray,
-                            T t_max = std::numeric_limits<T>::infinity()) {
+                         T t_max = std::numeric_limits<T>::infinity()) {
     isin::Hit<T> best;
     best.t = t_max;
     for (std::size_t i = 0; i < tris.size(); ++i) {
@@ -81,7 +81,9 @@ std::vector<isin::Triangle<T>> random_soup(int n, std::uint64_t seed) {
     std::vector<isin::Triangle<T>> tris;
     for (int i = 0; i < n; ++i) {
         const isin::Vertex<double> c{uni(rng) * 10, uni(rng) * 10, uni(rng) * 10};
-        auto p = [&](double s) { return isin::Vertex<T>{T(c.x + s * uni(rng)), T(c.y + s * uni(rng)), T(c.z + s * uni(rng))}; };
+        auto p = [&](double s) {
+            return isin::Vertex<T>{T(c.x + s * uni(rng)), T(c.y + s * uni(rng)), T(c.z + s * uni(rng))};
+        };
         tris.push_back({p(0.8), p(0.8), p(0.8)});
     }
     return tris;
@@ -89,8 +91,7 @@ std::vector<isin::Triangle<T>> random_soup(int n, std::uint64_t seed) {
 
 } // namespace
 
-TEST_CASE_TEMPLATE("BVH: nearest hit and any-hit agree with the brute-force watertight loop", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("BVH: nearest hit and any-hit agree with the brute-force watertight loop", T, float, double) {
     for (int n : {1, 7, 8, 9, 100, 3000}) {
         CAPTURE(n);
         const auto tris = random_soup<T>(n, std::uint64_t(n));
@@ -120,8 +121,7 @@ TEST_CASE_TEMPLATE("BVH: nearest hit and any-hit agree with the brute-force wate
     }
 }
 
-TEST_CASE_TEMPLATE("BVH: rays at the shared edges and vertices of a closed mesh never leak", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("BVH: rays at the shared edges and vertices of a closed mesh never leak", T, float, double) {
     for (const auto& m : {workloads::closed_sphere_edges<T>(3000), workloads::grid_edges<T>(3000)}) {
         const isin::Bvh<T> bvh{m.mesh};
         int leaks = 0;
@@ -133,8 +133,7 @@ TEST_CASE_TEMPLATE("BVH: rays at the shared edges and vertices of a closed mesh 
     }
 }
 
-TEST_CASE_TEMPLATE("BVH: axis-parallel directions, −0.0, rays from inside boxes and on planes", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("BVH: axis-parallel directions, −0.0, rays from inside boxes and on planes", T, float, double) {
     // A grid of unit squares in z = 5 (front faces towards −z) and one wall x = 3.
     std::vector<isin::Triangle<T>> tris;
     for (int j = -4; j < 4; ++j)
@@ -146,9 +145,9 @@ TEST_CASE_TEMPLATE("BVH: axis-parallel directions, −0.0, rays from inside boxe
     tris.push_back({{3, -10, -10}, {3, 10, -10}, {3, 0, 10}});
     const isin::Bvh<T> bvh{tris};
     const T nz = -T(0);
-    for (const isin::Vertex<T>& d : {isin::Vertex<T>{0, 0, 1}, isin::Vertex<T>{nz, 0, 1}, isin::Vertex<T>{0, nz, 1},
-                                     isin::Vertex<T>{nz, nz, 1}}) {
-        for (T x : {T(-3.5), T(0), T(0.5), T(1)})      // x = 0 and 1 lie on box planes and edges
+    for (const isin::Vertex<T>& d :
+         {isin::Vertex<T>{0, 0, 1}, isin::Vertex<T>{nz, 0, 1}, isin::Vertex<T>{0, nz, 1}, isin::Vertex<T>{nz, nz, 1}}) {
+        for (T x : {T(-3.5), T(0), T(0.5), T(1)}) // x = 0 and 1 lie on box planes and edges
             for (T y : {T(-2.25), T(0), T(2)}) {
                 const isin::Ray<T> ray{{x, y, 0}, d};
                 const auto h = bvh.intersect(ray);
@@ -173,11 +172,11 @@ TEST_CASE_TEMPLATE("BVH: axis-parallel directions, −0.0, rays from inside boxe
 
 TEST_CASE_TEMPLATE("BVH: bad rays and bad triangles are defined misses", T, float, double) {
     const T nan = std::numeric_limits<T>::quiet_NaN(), inf = std::numeric_limits<T>::infinity();
-    std::vector<isin::Triangle<T>> tris{{{0, 0, 5}, {0, 1, 5}, {1, 0, 5}},     // good: index 0
-                                        {{1, 1, 5}, {1, 1, 5}, {2, 2, 5}},     // zero area
-                                        {{nan, 0, 5}, {0, 1, 5}, {1, 0, 5}},   // NaN
-                                        {{0, 0, inf}, {0, 1, 5}, {1, 0, 5}},   // infinite
-                                        {{0, 0, 7}, {0, 1, 7}, {1, 0, 7}}};    // good: index 4
+    std::vector<isin::Triangle<T>> tris{{{0, 0, 5}, {0, 1, 5}, {1, 0, 5}},   // good: index 0
+                                        {{1, 1, 5}, {1, 1, 5}, {2, 2, 5}},   // zero area
+                                        {{nan, 0, 5}, {0, 1, 5}, {1, 0, 5}}, // NaN
+                                        {{0, 0, inf}, {0, 1, 5}, {1, 0, 5}}, // infinite
+                                        {{0, 0, 7}, {0, 1, 7}, {1, 0, 7}}};  // good: index 4
     const isin::Bvh<T> bvh{tris};
     CHECK(bvh.size() == 2);
     const auto h = bvh.intersect(isin::Ray<T>{{T(0.2), T(0.2), 0}, {0, 0, 1}});
@@ -206,8 +205,9 @@ TEST_CASE("BVH: one-thread and multi-thread builds give the same answers") {
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     int differ = 0;
     for (int r = 0; r < 2000; ++r) {
-        const isin::Ray<float> ray{{float(uni(rng) * 15), float(uni(rng) * 15), -20.0f},
-                                   isin::normalize(isin::Vertex<float>{float(uni(rng) * 0.5), float(uni(rng) * 0.5), 1})};
+        const isin::Ray<float> ray{
+            {float(uni(rng) * 15), float(uni(rng) * 15), -20.0f},
+            isin::normalize(isin::Vertex<float>{float(uni(rng) * 0.5), float(uni(rng) * 0.5), 1})};
         const auto x = a.intersect(ray), y = b.intersect(ray);
         differ += x.t != y.t; // same triangles, same kernel: the same t (the tree may differ)
     }
@@ -428,8 +428,10 @@ TEST_CASE("BVH build: threads that cannot start leave their work to the others, 
             if (bvh.intersect(ray).t != reference.intersect(ray).t) return false;
         return bvh.size() == reference.size();
     });
-    if (result == WithoutThreads::not_run) MESSAGE("not run: threads still start in a child under RLIMIT_NPROC = 0");
-    else CHECK(result == WithoutThreads::passed);
+    if (result == WithoutThreads::not_run)
+        MESSAGE("not run: threads still start in a child under RLIMIT_NPROC = 0");
+    else
+        CHECK(result == WithoutThreads::passed);
 }
 
 #ifdef ISIN_TEST_REPLACES_NEW
@@ -472,8 +474,11 @@ TEST_CASE_TEMPLATE("BVH culling flag: the leaf test keeps exactly the faces §11
         const isin::Bvh<T> bvh{tri};
         // through an inner point of the triangle (u, v in [0.1, 0.45]: away from its edges)
         const double u = 0.275 + 0.175 * uni(rng), v = 0.275 + 0.175 * uni(rng);
-        const auto at = [&](T a, T b, T c) { return T(double(a) + u * (double(b) - double(a)) + v * (double(c) - double(a))); };
-        const isin::Vertex<T> target{at(tri[0].v0.x, tri[0].v1.x, tri[0].v2.x), at(tri[0].v0.y, tri[0].v1.y, tri[0].v2.y),
+        const auto at = [&](T a, T b, T c) {
+            return T(double(a) + u * (double(b) - double(a)) + v * (double(c) - double(a)));
+        };
+        const isin::Vertex<T> target{at(tri[0].v0.x, tri[0].v1.x, tri[0].v2.x),
+                                     at(tri[0].v0.y, tri[0].v1.y, tri[0].v2.y),
                                      at(tri[0].v0.z, tri[0].v1.z, tri[0].v2.z)};
         const isin::Ray<T> ray{eye, target - eye};
         isin::HitFilter cull;
@@ -517,7 +522,8 @@ TEST_CASE_TEMPLATE("BVH culling: 20 culled layers in front of a visible face, an
     CHECK(bvh.intersect(ray, std::numeric_limits<T>::infinity(), only7).primitive == 7);
 }
 
-TEST_CASE_TEMPLATE("BVH for_each_hit: every triangle hit in (0, t_max) once, as brute force finds them", T, float, double) {
+TEST_CASE_TEMPLATE("BVH for_each_hit: every triangle hit in (0, t_max) once, as brute force finds them", T, float,
+                   double) {
     const auto tris = random_soup<T>(3000, 21);
     const isin::Bvh<T> bvh{tris};
     std::mt19937_64 rng(5);
@@ -591,7 +597,9 @@ TEST_CASE_TEMPLATE("BvhTree with the caller's leaf: spheres found as brute force
     const auto tree = isin::build_bvh<T>(spheres.size(), [&](std::size_t i) {
         isin::Box<T> b;
         const auto& s = spheres[i];
-        if (s.radius > T(0)) b.grow(s.center - isin::Vertex<T>{s.radius, s.radius, s.radius}), b.grow(s.center + isin::Vertex<T>{s.radius, s.radius, s.radius});
+        if (s.radius > T(0))
+            b.grow(s.center - isin::Vertex<T>{s.radius, s.radius, s.radius}),
+                b.grow(s.center + isin::Vertex<T>{s.radius, s.radius, s.radius});
         return b;
     });
     CHECK(tree.size() == 2000);

@@ -17,15 +17,13 @@ TEST_CASE_TEMPLATE("§3 ray: R(t) = Ro + t·Rd", T, float, double) {
     CHECK(p.z == approx(11));
 }
 
-TEST_CASE_TEMPLATE("§3 example 3a: pixel (0,0) → (−8,4.5,10), pixel (799,449) → (8,−4.5,10)", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§3 example 3a: pixel (0,0) → (−8,4.5,10), pixel (799,449) → (8,−4.5,10)", T, float, double) {
     const isin::Camera<T> cam{800, 450};
     CHECK(cam.image_point(T(0), T(0)) == isin::Vertex<T>{-8, T(4.5), 10});
     CHECK(cam.image_point(T(799), T(449)) == isin::Vertex<T>{8, T(-4.5), 10});
 }
 
-TEST_CASE_TEMPLATE("§3 GD(x,y) = (16·x/(W−1) − 8, 4.5 − 9·y/(H−1), 10) for any W×H", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§3 GD(x,y) = (16·x/(W−1) − 8, 4.5 − 9·y/(H−1), 10) for any W×H", T, float, double) {
     const isin::Camera<T> cam{1920, 1080};
     for (int y : {0, 17, 540, 1079})
         for (int x : {0, 3, 960, 1919}) {
@@ -51,8 +49,7 @@ TEST_CASE_TEMPLATE("§3 primary ray: Ro = eye, Rd = normalize(GD − eye)", T, f
     CHECK(centre.direction.z == approx(1));
 }
 
-TEST_CASE_TEMPLATE("§3 a posed camera moves and turns the whole rig (left-handed, +Y up)", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§3 a posed camera moves and turns the whole rig (left-handed, +Y up)", T, float, double) {
     const T half_pi = T(1.5707963267948966);
     const isin::Camera<T> cam{800, 450, {5, 1, -2}, half_pi, T(0)};
     // Yaw +90° turns forward +Z into +X and right +X into −Z.
@@ -126,8 +123,7 @@ TEST_CASE_TEMPLATE("§12 walking: D moves along +X when facing +Z, A along −X"
     CHECK(cam.position() == isin::Vertex<T>{-2, 0, 5});
 }
 
-TEST_CASE_TEMPLATE("§12 turning: yaw by 90° turns +Z into +X; pitch is limited to ±89°", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§12 turning: yaw by 90° turns +Z into +X; pitch is limited to ±89°", T, float, double) {
     isin::Camera<T> cam{160, 90};
     cam.turn(T(1.5707963267948966));
     CHECK(cam.forward().x == approx(1));
@@ -141,8 +137,7 @@ TEST_CASE_TEMPLATE("§12 turning: yaw by 90° turns +Z into +X; pitch is limited
     CHECK(cam.pitch() == approx(-1.5533430342749532));
 }
 
-TEST_CASE_TEMPLATE("§12 the note's pixel mapping is unchanged at rest and after a round trip", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§12 the note's pixel mapping is unchanged at rest and after a round trip", T, float, double) {
     isin::Camera<T> cam{800, 450};
     CHECK(cam.image_point(T(0), T(0)) == isin::Vertex<T>{-8, T(4.5), 10});
     cam.turn(T(0.3));

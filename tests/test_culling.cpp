@@ -21,8 +21,7 @@ const isin::Triangle<T> reordered_11a{{40, 0, -40}, {0, 0, 40}, {-40, 0, -40}};
 
 } // namespace
 
-TEST_CASE_TEMPLATE("§11 example 11b: light (0,60,80), L = (0,0.6,0.8), diffuse 0.6 vs −0.6 (unlit)", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§11 example 11b: light (0,60,80), L = (0,0.6,0.8), diffuse 0.6 vs −0.6 (unlit)", T, float, double) {
     const isin::Vertex<T> light{0, 60, 80}, P{0, 0, 0};
     const auto L = isin::normalize(light - P);
     CHECK(L.y == approx(0.6));
@@ -35,8 +34,7 @@ TEST_CASE_TEMPLATE("§11 example 11b: light (0,60,80), L = (0,0.6,0.8), diffuse 
     CHECK(isin::diffuse_coefficient(N2, L) == T(0)); // unlit
 }
 
-TEST_CASE_TEMPLATE("§11 method 1: (eye − V)·N < 0 → backface; eye (0,60,80) culls the reordered", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§11 method 1: (eye − V)·N < 0 → backface; eye (0,60,80) culls the reordered", T, float, double) {
     const isin::Vertex<T> eye{0, 60, 80};
     CHECK_FALSE(isin::is_backface(first_11a<T>, eye));
     CHECK(isin::is_backface(reordered_11a<T>, eye));
@@ -54,20 +52,18 @@ TEST_CASE_TEMPLATE("§11 projection by similar triangles: x' = d·x/z, y' = d·y
     CHECK(isin::is_backface_projected(isin::Triangle<T>{red.v0, red.v2, red.v1}));
 }
 
-TEST_CASE_TEMPLATE("§11 method 2 at eye (0,60,80) looking at the origin agrees with method 1", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§11 method 2 at eye (0,60,80) looking at the origin agrees with method 1", T, float, double) {
     const auto cam = isin::Camera<T>::look_at(800, 450, {0, 60, 80}, {0, 0, 0});
     CHECK_FALSE(isin::is_backface_projected(isin::to_camera_space(cam, first_11a<T>)));
     CHECK(isin::is_backface_projected(isin::to_camera_space(cam, reordered_11a<T>)));
 }
 
-TEST_CASE_TEMPLATE("§11 both methods agree on every triangle of a closed mesh from many eyes", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§11 both methods agree on every triangle of a closed mesh from many eyes", T, float, double) {
     const isin::Vertex<T> centre{3, -2, 50};
     const auto mesh = workloads::icosphere<T>({3, -2, 50}, 10.0, 2); // 320 triangles, closed
     REQUIRE(mesh.size() == 320);
-    const isin::Vertex<T> eyes[] = {{0, 0, 0}, {0, 60, 80}, {40, -30, 10}, {-25, 5, 95},
-                                    {3, 40, 50}, {60, 0, 50}, {3, -2, 20}, {-30, -30, 140}};
+    const isin::Vertex<T> eyes[] = {{0, 0, 0},   {0, 60, 80}, {40, -30, 10}, {-25, 5, 95},
+                                    {3, 40, 50}, {60, 0, 50}, {3, -2, 20},   {-30, -30, 140}};
     for (const auto& eye : eyes) {
         CAPTURE(eye.x);
         CAPTURE(eye.z);

@@ -30,7 +30,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
 /// Names in `dir`, sorted.
 std::vector<std::string> listing(const fs::path& dir) {
     std::vector<std::string> names;
@@ -145,8 +144,8 @@ TEST_CASE("write_ppm: binary P6 header, then RGB bytes row by row from the top")
 
 TEST_CASE("read_image: PPM with comments and maxval 15 or 65535 is scaled to 0…255") {
     TempDir dir{"isin-test-image-"};
-    put_file(dir / "c.ppm", std::string("P6 # comment\n# more\n2 1\n15\n") + '\x0f' + '\x00' + '\x05' +
-                                '\x07' + '\x0f' + '\x00');
+    put_file(dir / "c.ppm",
+             std::string("P6 # comment\n# more\n2 1\n15\n") + '\x0f' + '\x00' + '\x05' + '\x07' + '\x0f' + '\x00');
     const isin::Image a = isin::read_image(dir / "c.ppm");
     REQUIRE(a.width() == 2);
     REQUIRE(a.height() == 1);
@@ -339,8 +338,7 @@ TEST_CASE("read_image: missing, garbage, truncated or directory paths throw nami
     put_file(huge, "P6\n40000 1\n255\n");
     CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(huge); }), huge));
 
-    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir.path.string()); }),
-                   dir.path.string()));
+    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir.path.string()); }), dir.path.string()));
 }
 
 // ---- hardening: hostile files, limits, in-memory decoding, names ----------------------------------
@@ -421,7 +419,8 @@ TEST_CASE("read_image: a PNG whose first IDAT chunks are empty decodes (stb is g
     std::vector<unsigned char> png = png_of(image, dir);
     std::size_t idat = 8;
     while (idat + 8 <= png.size() && std::string(png.begin() + long(idat) + 4, png.begin() + long(idat) + 8) != "IDAT")
-        idat += 12 + (std::size_t(png[idat]) << 24 | std::size_t(png[idat + 1]) << 16 | std::size_t(png[idat + 2]) << 8 | png[idat + 3]);
+        idat += 12 + (std::size_t(png[idat]) << 24 | std::size_t(png[idat + 1]) << 16 |
+                      std::size_t(png[idat + 2]) << 8 | png[idat + 3]);
     REQUIRE(idat + 8 <= png.size());
     const unsigned char empty_idat[12] = {0, 0, 0, 0, 'I', 'D', 'A', 'T', 0x35, 0xaf, 0x06, 0x1e};
     png.insert(png.begin() + long(idat), std::begin(empty_idat), std::end(empty_idat));
@@ -440,8 +439,9 @@ TEST_CASE("read_image_from_memory decodes what read_image decodes, and names its
     const std::string jpeg(std::begin(flat_jpeg), std::end(flat_jpeg));
     put_file(dir / "f.jpg", jpeg);
     CHECK(same_pixels(isin::read_image_from_memory(jpeg.data(), jpeg.size()), isin::read_image(dir / "f.jpg")));
-    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image_from_memory("GIF89a", 6, {}, "upload #3"); }),
-                   "'upload #3'"));
+    CHECK(
+        contains(thrown<std::runtime_error>([&] { (void)isin::read_image_from_memory("GIF89a", 6, {}, "upload #3"); }),
+                 "'upload #3'"));
     CHECK_THROWS_AS((void)isin::read_image_from_memory(nullptr, 100), std::runtime_error);
 }
 
@@ -451,9 +451,11 @@ TEST_CASE("read_image refuses devices, pipes and links to them at once, and file
     TempDir dir{"isin-test-image-"};
     CHECK(contains(thrown<std::runtime_error>([] { (void)isin::read_image("/dev/zero"); }), "not a regular file"));
     fs::create_symlink("/dev/zero", dir.path / "zero.png");
-    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir / "zero.png"); }), "not a regular file"));
+    CHECK(
+        contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir / "zero.png"); }), "not a regular file"));
     REQUIRE(::mkfifo((dir / "fifo.ppm").c_str(), 0600) == 0);
-    CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir / "fifo.ppm"); }), "not a regular file"));
+    CHECK(
+        contains(thrown<std::runtime_error>([&] { (void)isin::read_image(dir / "fifo.ppm"); }), "not a regular file"));
     isin::write_ppm(gradient(8, 8), dir / "a.ppm");
     isin::ReadLimits limits;
     limits.max_file_bytes = 100; // the file is 8·8·3 + 11 = 203 bytes
@@ -486,5 +488,6 @@ TEST_CASE("check_image_output: the format and size write_image would refuse, bef
     CHECK(contains(thrown<std::invalid_argument>([] { isin::check_image_output("a.png", 32768, 10923); }),
                    "too large for the PNG encoder"));
     CHECK_NOTHROW(isin::check_image_output("a.PPM", 32768, 32768));
-    CHECK(contains(thrown<std::invalid_argument>([] { isin::check_image_output("a.gif", 10, 10); }), "unknown extension"));
+    CHECK(contains(thrown<std::invalid_argument>([] { isin::check_image_output("a.gif", 10, 10); }),
+                   "unknown extension"));
 }

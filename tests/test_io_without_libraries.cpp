@@ -26,11 +26,13 @@ TEST_CASE("without stb: PPM reads and writes, PNG and JPEG throw runtime_error n
 
 TEST_CASE("without tinyobjloader: PLY loads, OBJ throws runtime_error naming libtinyobjloader-dev") {
     TempDir dir{"isin-test-noio-"};
-    const std::string ply = dir.put("t.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                                             "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-                                             "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    const std::string ply =
+        dir.put("t.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                         "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                         "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
     CHECK(isin::load_mesh<float>(ply).size() == 1);
     const std::string obj = dir.put("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    CHECK_THROWS_WITH_AS((void)isin::load_obj<float>(obj), doctest::Contains("libtinyobjloader-dev"), std::runtime_error);
+    CHECK_THROWS_WITH_AS((void)isin::load_obj<float>(obj), doctest::Contains("libtinyobjloader-dev"),
+                         std::runtime_error);
     CHECK_THROWS_WITH_AS((void)isin::load_mesh<double>(obj), doctest::Contains(obj.c_str()), std::runtime_error);
 }

@@ -22,7 +22,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
 /// The what() of the E thrown by f, or "" (and a failed check) if none was thrown.
 template <class E = isin::MeshError, class F>
 std::string thrown(F f) {
@@ -131,8 +130,8 @@ std::string header(std::initializer_list<const char*> lines) {
 
 } // namespace
 
-TEST_CASE_TEMPLATE("OBJ: quad, triangle, pentagon become fans (v0, vi, vi+1) with exact coordinates", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("OBJ: quad, triangle, pentagon become fans (v0, vi, vi+1) with exact coordinates", T, float,
+                   double) {
     TempDir dir{"isin-test-mesh-"};
     const auto tris = isin::load_obj<T>(dir.put("polygons.obj", polygons_obj));
     REQUIRE(tris.size() == 2 + 1 + 3 + 1);
@@ -168,7 +167,7 @@ TEST_CASE_TEMPLATE("OBJ: negative indices, v/vt/vn forms, groups, usemtl and a m
                             "g second\n"
                             "usemtl nothing\n"
                             "v 0 0 1\n"
-                            "v 1 0 1 1.0\n"        // with w
+                            "v 1 0 1 1.0\n"         // with w
                             "v 0 1 1 0.5 0.5 0.5\n" // with a colour
                             "f 4//1 5//1 6//1\n"
                             "o object\n"
@@ -190,21 +189,19 @@ TEST_CASE("OBJ: a face may name vertices defined later in the file; CRLF line en
     check_triangle(tris[0], V<double>(0, 0, 0), V<double>(1, 0, 0), V<double>(0, 1, 0));
 }
 
-
 TEST_CASE("OBJ and PLY without faces give an empty mesh, not an error") {
     TempDir dir{"isin-test-mesh-"};
     CHECK(isin::load_obj<float>(dir.put("empty.obj", "")).empty());
     CHECK(isin::load_obj<float>(dir.put("points.obj", "# only vertices\nv 0 0 0\nv 1 1 1\n")).empty());
-    CHECK(isin::load_ply<float>(dir.put("points.ply", header({"ply", "format ascii 1.0", "element vertex 1",
-                                                             "property float x", "property float y",
-                                                             "property float z"}) +
-                                                         "1 2 3\n"))
+    CHECK(isin::load_ply<float>(
+              dir.put("points.ply", header({"ply", "format ascii 1.0", "element vertex 1", "property float x",
+                                            "property float y", "property float z"}) +
+                                        "1 2 3\n"))
               .empty());
     CHECK(isin::load_ply<float>(dir.put("nothing.ply", header({"ply", "format binary_little_endian 1.0"}))).empty());
 }
 
-TEST_CASE_TEMPLATE("PLY ascii: extra vertex properties and elements are skipped, quads become fans", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("PLY ascii: extra vertex properties and elements are skipped, quads become fans", T, float, double) {
     TempDir dir{"isin-test-mesh-"};
     const auto tris = isin::load_ply<T>(dir.put("mesh.ply", ascii_ply));
     REQUIRE(tris.size() == 3);
@@ -215,20 +212,34 @@ TEST_CASE_TEMPLATE("PLY ascii: extra vertex properties and elements are skipped,
     CHECK(isin::normal(tris[1]).z > T(0));
 }
 
-TEST_CASE_TEMPLATE("PLY binary little-endian: float/int32/uint8 data, lists skipped byte-exactly", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("PLY binary little-endian: float/int32/uint8 data, lists skipped byte-exactly", T, float, double) {
     if (!host_is_little_endian()) {
         MESSAGE("skipped: the test writes the binary body in the host's byte order");
         return;
     }
     TempDir dir{"isin-test-mesh-"};
-    std::string file = header({"ply", "format binary_little_endian 1.0", "comment a camera first, to skip",
-                               "element camera 1", "property double fov", "property list uchar short ids",
-                               "element vertex 5", "property float x", "property float y", "property float z",
-                               "property float nx", "property float ny", "property float nz",
-                               "property uchar red", "property uchar green", "property uchar blue",
-                               "element material 2", "property list int float values", "property ushort id",
-                               "element face 2", "property uchar flags", "property list uchar int vertex_indices",
+    std::string file = header({"ply",
+                               "format binary_little_endian 1.0",
+                               "comment a camera first, to skip",
+                               "element camera 1",
+                               "property double fov",
+                               "property list uchar short ids",
+                               "element vertex 5",
+                               "property float x",
+                               "property float y",
+                               "property float z",
+                               "property float nx",
+                               "property float ny",
+                               "property float nz",
+                               "property uchar red",
+                               "property uchar green",
+                               "property uchar blue",
+                               "element material 2",
+                               "property list int float values",
+                               "property ushort id",
+                               "element face 2",
+                               "property uchar flags",
+                               "property list uchar int vertex_indices",
                                "property int8 tag"});
     Bytes b;
     b.put(0.75).put(std::uint8_t{3}).put(std::int16_t{-1}).put(std::int16_t{7}).put(std::int16_t{9});
@@ -258,9 +269,9 @@ TEST_CASE_TEMPLATE("PLY binary little-endian: float/int32/uint8 data, lists skip
 TEST_CASE_TEMPLATE("PLY binary: double and int16 coordinates, uint indices, a 200-gon", T, float, double) {
     if (!host_is_little_endian()) return;
     TempDir dir{"isin-test-mesh-"};
-    std::string file = header({"ply", "format binary_little_endian 1.0", "element vertex 200",
-                               "property double z", "property int16 x", "property float64 y",
-                               "element face 1", "property list ushort uint vertex_index"});
+    std::string file =
+        header({"ply", "format binary_little_endian 1.0", "element vertex 200", "property double z", "property int16 x",
+                "property float64 y", "element face 1", "property list ushort uint vertex_index"});
     Bytes b;
     for (int i = 0; i < 200; ++i) b.put(0.5 * i).put(static_cast<std::int16_t>(-i)).put(1e-3);
     b.put(std::uint16_t{200});
@@ -377,7 +388,6 @@ TEST_CASE_TEMPLATE("OBJ: numbers tinyobjloader's arithmetic gets wrong are rerea
     check_triangle(tris[0], V<T>(0, 1, 2), V<T>(1, 0, 0), V<T>(0, 1, 0));
 }
 
-
 TEST_CASE("OBJ and PLY: 1e300 does not fit a float (line named) but loads as a double") {
     TempDir dir{"isin-test-mesh-"};
     const std::string obj = dir.put("big.obj", "v 0 0 0\nv 1 0 0\nv 1e300 1 0\nf 1 2 3\n");
@@ -388,23 +398,22 @@ TEST_CASE("OBJ and PLY: 1e300 does not fit a float (line named) but loads as a d
     REQUIRE(tris.size() == 1);
     CHECK(tris[0].v2.x == doctest::Approx(1e300));
 
-    const std::string ply = dir.put("big.ply", header({"ply", "format ascii 1.0", "element vertex 3",
-                                                       "property double x", "property double y",
-                                                       "property double z", "element face 1",
-                                                       "property list uchar int vertex_indices"}) +
-                                                   "0 0 0\n1 0 0\n0 -1e300 0\n3 0 1 2\n");
+    const std::string ply = dir.put(
+        "big.ply", header({"ply", "format ascii 1.0", "element vertex 3", "property double x", "property double y",
+                           "property double z", "element face 1", "property list uchar int vertex_indices"}) +
+                       "0 0 0\n1 0 0\n0 -1e300 0\n3 0 1 2\n");
     const std::string why_ply = thrown([&] { (void)isin::load_ply<float>(ply); });
     CHECK(str(why_ply) == doctest::Contains("line 12"));
     CHECK(str(why_ply) == doctest::Contains("does not fit in float"));
     CHECK(isin::load_ply<double>(ply).at(0).v2.y == doctest::Approx(-1e300));
 
     if (host_is_little_endian()) {
-        const std::string bin = dir.put("big_bin.ply", header({"ply", "format binary_little_endian 1.0",
-                                                               "element vertex 1", "property double x",
-                                                               "property double y", "property double z"}) +
-                                                           Bytes{}.put(0.0).put(1e300).put(0.0).data);
-        const std::string h = header({"ply", "format binary_little_endian 1.0", "element vertex 1",
-                                      "property double x", "property double y", "property double z"});
+        const std::string bin =
+            dir.put("big_bin.ply", header({"ply", "format binary_little_endian 1.0", "element vertex 1",
+                                           "property double x", "property double y", "property double z"}) +
+                                       Bytes{}.put(0.0).put(1e300).put(0.0).data);
+        const std::string h = header({"ply", "format binary_little_endian 1.0", "element vertex 1", "property double x",
+                                      "property double y", "property double z"});
         CHECK(str(thrown([&] { (void)isin::load_ply<float>(bin); })) ==
               doctest::Contains(str("offset " + std::to_string(h.size() + 8))));
     }
@@ -413,11 +422,11 @@ TEST_CASE("OBJ and PLY: 1e300 does not fit a float (line named) but loads as a d
 TEST_CASE("PLY: a huge count in the header with little data throws at once, allocating nothing big") {
     TempDir dir{"isin-test-mesh-"};
     const auto begin = std::chrono::steady_clock::now();
-    const std::string ascii = dir.put("huge.ply", header({"ply", "format ascii 1.0", "element vertex 4000000000",
-                                                          "property float x", "property float y",
-                                                          "property float z", "element face 4000000000",
-                                                          "property list uchar int vertex_indices"}) +
-                                                      "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    const std::string ascii =
+        dir.put("huge.ply",
+                header({"ply", "format ascii 1.0", "element vertex 4000000000", "property float x", "property float y",
+                        "property float z", "element face 4000000000", "property list uchar int vertex_indices"}) +
+                    "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
     std::string why = thrown([&] { (void)isin::load_ply<float>(ascii); });
     CHECK(str(why) == doctest::Contains("truncated"));
     CHECK(str(why) == doctest::Contains("4000000000"));
@@ -430,12 +439,12 @@ TEST_CASE("PLY: a huge count in the header with little data throws at once, allo
     CHECK(str(why) == doctest::Contains("4000000000"));
 
     // A face claiming 4e9 indices, with 12 bytes behind it.
-    const std::string hf = header({"ply", "format binary_little_endian 1.0", "element vertex 3",
-                                   "property uchar x", "property uchar y", "property uchar z", "element face 1",
-                                   "property list uint int vertex_indices"});
-    const std::string list = dir.put("huge_list.ply", hf + std::string(9, '\0') +
-                                                          Bytes{}.put(std::uint32_t{4000000000u}).data +
-                                                          std::string(12, '\0'));
+    const std::string hf =
+        header({"ply", "format binary_little_endian 1.0", "element vertex 3", "property uchar x", "property uchar y",
+                "property uchar z", "element face 1", "property list uint int vertex_indices"});
+    const std::string list =
+        dir.put("huge_list.ply",
+                hf + std::string(9, '\0') + Bytes{}.put(std::uint32_t{4000000000u}).data + std::string(12, '\0'));
     why = thrown([&] { (void)isin::load_ply<float>(list); });
     CHECK(str(why) == doctest::Contains(str("truncated at offset " + std::to_string(hf.size() + 9 + 4))));
 
@@ -448,22 +457,22 @@ TEST_CASE("PLY: a huge count in the header with little data throws at once, allo
 
 TEST_CASE("PLY: an index out of range names the line (ASCII) or byte offset (binary)") {
     TempDir dir{"isin-test-mesh-"};
-    const std::string h = header({"ply", "format ascii 1.0", "element vertex 4", "property float x",
-                                  "property float y", "property float z", "element face 2",
-                                  "property list uchar int vertex_indices"});
+    const std::string h = header({"ply", "format ascii 1.0", "element vertex 4", "property float x", "property float y",
+                                  "property float z", "element face 2", "property list uchar int vertex_indices"});
     const std::string ascii = dir.put("range.ply", h + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n\n3 0 2 4\n");
     std::string why = thrown([&] { (void)isin::load_ply<float>(ascii); });
     CHECK(str(why) == doctest::Contains(str(ascii)));
     CHECK(str(why) == doctest::Contains("line 16"));
     CHECK(str(why) == doctest::Contains("vertex index 4 is out of range"));
-    CHECK(str(thrown([&] { (void)isin::load_ply<float>(dir.put("neg.ply", h + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
-                                                                                "3 0 -1 2\n3 0 1 2\n")); })) ==
-          doctest::Contains("line 14"));
+    CHECK(str(thrown([&] {
+              (void)isin::load_ply<float>(dir.put("neg.ply", h + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
+                                                                 "3 0 -1 2\n3 0 1 2\n"));
+          })) == doctest::Contains("line 14"));
 
     if (host_is_little_endian()) {
-        const std::string hb = header({"ply", "format binary_little_endian 1.0", "element vertex 3",
-                                       "property float x", "property float y", "property float z",
-                                       "element face 1", "property list uchar int vertex_indices"});
+        const std::string hb = header({"ply", "format binary_little_endian 1.0", "element vertex 3", "property float x",
+                                       "property float y", "property float z", "element face 1",
+                                       "property list uchar int vertex_indices"});
         Bytes b;
         for (int i = 0; i < 9; ++i) b.put(static_cast<float>(i));
         b.put(std::uint8_t{3}).put(std::int32_t{0}).put(std::int32_t{1}).put(std::int32_t{3});
@@ -475,9 +484,9 @@ TEST_CASE("PLY: an index out of range names the line (ASCII) or byte offset (bin
 
 TEST_CASE("PLY: truncated data throws 'truncated at offset N' (binary) or at a line (ASCII)") {
     TempDir dir{"isin-test-mesh-"};
-    const std::string hb = header({"ply", "format binary_little_endian 1.0", "element vertex 3",
-                                   "property float x", "property float y", "property float z", "element face 1",
-                                   "property list uchar int vertex_indices"});
+    const std::string hb =
+        header({"ply", "format binary_little_endian 1.0", "element vertex 3", "property float x", "property float y",
+                "property float z", "element face 1", "property list uchar int vertex_indices"});
     Bytes b;
     for (int i = 0; i < 9; ++i) b.put(static_cast<float>(i));
     b.put(std::uint8_t{3}).put(std::int32_t{0}).put(std::int32_t{1}).put(std::int32_t{2});
@@ -488,9 +497,9 @@ TEST_CASE("PLY: truncated data throws 'truncated at offset N' (binary) or at a l
     why = thrown([&] { (void)isin::load_ply<float>(dir.put("cut2.ply", hb + b.data.substr(0, 18))); });
     CHECK(str(why) == doctest::Contains("truncated at offset"));
 
-    const std::string ha = header({"ply", "format ascii 1.0", "element vertex 3", "property float x",
-                                   "property float y", "property float z", "element face 1",
-                                   "property list uchar int vertex_indices"});
+    const std::string ha =
+        header({"ply", "format ascii 1.0", "element vertex 3", "property float x", "property float y",
+                "property float z", "element face 1", "property list uchar int vertex_indices"});
     why = thrown([&] { (void)isin::load_ply<float>(dir.put("cut.ply", ha + "0 0 0\n1 0 0\n0 1 0\n3 0 1")); });
     CHECK(str(why) == doctest::Contains("truncated at line 13"));
     why = thrown([&] { (void)isin::load_ply<float>(dir.put("extra.ply", ha + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n7\n")); });
@@ -511,8 +520,7 @@ TEST_CASE("PLY: bad headers and unsupported formats throw with the line") {
           doctest::Contains("end_header"));
     CHECK(why("count.ply", "ply\nformat ascii 1.0\nelement vertex -5\nend_header\n") ==
           doctest::Contains("line 3: bad element count"));
-    CHECK(why("orphan.ply", "ply\nformat ascii 1.0\nproperty float x\nend_header\n") ==
-          doctest::Contains("line 3"));
+    CHECK(why("orphan.ply", "ply\nformat ascii 1.0\nproperty float x\nend_header\n") == doctest::Contains("line 3"));
     CHECK(why("keyword.ply", "ply\nformat ascii 1.0\nelemnt vertex 1\nend_header\n") ==
           doctest::Contains("line 3: unknown header keyword"));
     CHECK(why("noformat.ply", "ply\nelement vertex 0\nend_header\n") == doctest::Contains("format"));
@@ -529,9 +537,9 @@ TEST_CASE("PLY: bad headers and unsupported formats throw with the line") {
 
 TEST_CASE("PLY: NaN coordinates, short faces and malformed numbers throw with their position") {
     TempDir dir{"isin-test-mesh-"};
-    const std::string ha = header({"ply", "format ascii 1.0", "element vertex 3", "property float x",
-                                   "property float y", "property float z", "element face 1",
-                                   "property list uchar int vertex_indices"});
+    const std::string ha =
+        header({"ply", "format ascii 1.0", "element vertex 3", "property float x", "property float y",
+                "property float z", "element face 1", "property list uchar int vertex_indices"});
     const auto why = [&](const std::string& name, const std::string& text) {
         return str(thrown([&] { (void)isin::load_ply<double>(dir.put(name, text)); }));
     };
@@ -542,8 +550,8 @@ TEST_CASE("PLY: NaN coordinates, short faces and malformed numbers throw with th
     CHECK(why("dots.ply", ha + "0 0 0\n1.2.3 0 0\n0 1 0\n3 0 1 2\n") == doctest::Contains("line 11"));
     CHECK(why("uchar.ply", ha + "0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n") == doctest::Contains("out of range"));
     if (host_is_little_endian()) {
-        const std::string hb = header({"ply", "format binary_little_endian 1.0", "element vertex 2",
-                                       "property float x", "property float y", "property float z"});
+        const std::string hb = header({"ply", "format binary_little_endian 1.0", "element vertex 2", "property float x",
+                                       "property float y", "property float z"});
         Bytes b;
         b.put(0.0f).put(0.0f).put(0.0f).put(1.0f).put(std::numeric_limits<float>::quiet_NaN()).put(0.0f);
         const doctest::String w = why("nan_bin.ply", hb + b.data);
@@ -571,10 +579,11 @@ TEST_CASE("OBJ: exponents tinyobjloader's guard lets overflow are refused, on v,
     CHECK(why("vt.obj", "vt 1E+99999999999 0\n") == doctest::Contains("exponent"));
     CHECK(why("long.obj", "v 0 0 0." + std::string(5000, '1') + "\n") == doctest::Contains("longer than"));
     CHECK(why("vtindex.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/99999999999 2 3\n") == doctest::Contains("out of range"));
-    CHECK(why("vnindex.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//-99999999999 2 3\n") == doctest::Contains("out of range"));
+    CHECK(why("vnindex.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//-99999999999 2 3\n") ==
+          doctest::Contains("out of range"));
     // nine significant exponent digits (and any number of leading zeros) are fine
     const auto tris = isin::load_obj<float>(dir.put("ok.obj", "v 0 0 1e-000000000000999999999\nvn 0 0 1e-999999999\n"
-                                                                "v 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+                                                              "v 1 0 0\nv 0 1 0\nf 1 2 3\n"));
     REQUIRE(tris.size() == 1);
     CHECK(tris[0].v0.z == 0.0f);
 }
@@ -591,8 +600,9 @@ TEST_CASE_TEMPLATE("load_mesh_from_memory reads what load_mesh reads, naming its
     const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\n";
     CHECK(isin::load_mesh_from_memory<T>(obj.data(), obj.size(), isin::MeshFormat::obj).size() == 2);
     const std::string bad = "v 0 0 0\nf 1 2 3\n";
-    CHECK(str(thrown([&] { (void)isin::load_mesh_from_memory<T>(bad.data(), bad.size(), isin::MeshFormat::obj, "socket 7"); })) ==
-          doctest::Contains("'socket 7': line 2"));
+    CHECK(str(thrown([&] {
+              (void)isin::load_mesh_from_memory<T>(bad.data(), bad.size(), isin::MeshFormat::obj, "socket 7");
+          })) == doctest::Contains("'socket 7': line 2"));
     CHECK(str(thrown([&] { (void)isin::load_mesh_from_memory<T>(nullptr, 10, isin::MeshFormat::ply); })) ==
           doctest::Contains("not a PLY file"));
 }
@@ -601,7 +611,8 @@ TEST_CASE_TEMPLATE("load_mesh_from_memory reads what load_mesh reads, naming its
 TEST_CASE("load_mesh refuses devices, pipes and links to them at once, and files over the size limit (D10)") {
     TempDir dir{"isin-test-mesh-"};
     fs::create_symlink("/dev/zero", dir.path / "zero.ply");
-    CHECK(str(thrown([&] { (void)isin::load_mesh<float>(dir / "zero.ply"); })) == doctest::Contains("not a regular file"));
+    CHECK(str(thrown([&] { (void)isin::load_mesh<float>(dir / "zero.ply"); })) ==
+          doctest::Contains("not a regular file"));
     CHECK(str(thrown([&] { (void)isin::load_ply<float>("/dev/urandom"); })) == doctest::Contains("not a regular file"));
     const std::string obj = dir.put("a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     isin::ReadLimits limits;

@@ -42,8 +42,7 @@ Count triangle_acne(T far, T size, bool offset, int rays) {
         const auto P = primary.at(h.t);
         const auto origin = offset ? isin::offset_origin(P, N) : P;
         const isin::Ray<T> shadow{origin, light - origin};
-        c.acne += bool(isin::intersect_moller_trumbore(shadow, tri)) ||
-                  bool(isin::intersect_area(shadow, tri));
+        c.acne += bool(isin::intersect_moller_trumbore(shadow, tri)) || bool(isin::intersect_area(shadow, tri));
     }
     return c;
 }
@@ -73,8 +72,7 @@ Count sphere_acne(T far, T r, int rays) {
 
 } // namespace
 
-TEST_CASE_TEMPLATE("§9 offset_origin: no shadow acne on flat triangles, 1 to 1e6 from the origin", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§9 offset_origin: no shadow acne on flat triangles, 1 to 1e6 from the origin", T, float, double) {
     for (T far : {T(0), T(1), T(1e3), T(1e6)})
         for (T size : {T(1e-2), T(1), T(1e2)}) {
             if (std::is_same_v<T, float> && far > T(1e4) * size) continue; // below float's resolution
@@ -86,13 +84,12 @@ TEST_CASE_TEMPLATE("§9 offset_origin: no shadow acne on flat triangles, 1 to 1e
         }
     // Without the offset the same rays do self-shadow (this is what the offset is for).
     const Count naive = triangle_acne(T(1e3), T(1), false, 2000);
-    MESSAGE("shadow rays from the bare hit point, 1e3 from the origin: " << naive.acne << " of "
-                                                                          << naive.hits << " hit");
+    MESSAGE("shadow rays from the bare hit point, 1e3 from the origin: " << naive.acne << " of " << naive.hits
+                                                                         << " hit");
     CHECK(naive.acne > 0);
 }
 
-TEST_CASE_TEMPLATE("§9 offset_origin: no shadow acne on spheres, r = 1e-2…1e4, far from the origin",
-                   T, float, double) {
+TEST_CASE_TEMPLATE("§9 offset_origin: no shadow acne on spheres, r = 1e-2…1e4, far from the origin", T, float, double) {
     for (T far : {T(0), T(1e3), T(1e5)})
         for (T r : {T(1e-2), T(1), T(1e4)}) {
             if (std::is_same_v<T, float> && far / r > T(1e6)) continue; // below float's resolution
@@ -117,6 +114,5 @@ TEST_CASE_TEMPLATE("offset_origin moves along the normal, scale-aware, finite", 
     const auto down = isin::offset_origin(isin::Vertex<T>{0, T(-5), 0}, n);
     CHECK(down.y > T(-5));
     const auto nan = std::numeric_limits<T>::quiet_NaN();
-    CHECK(isin::offset_origin(isin::Vertex<T>{1, 2, 3}, isin::Vertex<T>{nan, 0, 0}) ==
-          isin::Vertex<T>{1, 2, 3});
+    CHECK(isin::offset_origin(isin::Vertex<T>{1, 2, 3}, isin::Vertex<T>{nan, 0, 0}) == isin::Vertex<T>{1, 2, 3});
 }

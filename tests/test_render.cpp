@@ -39,8 +39,7 @@ TEST_CASE("scene: a scene stores only the primitive kinds it names") {
     CHECK(hit.t == approx(45));
 }
 
-TEST_CASE_TEMPLATE("§5 scene: nearest hit of example 5a is blue Z at t = 77, both triangle methods", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§5 scene: nearest hit of example 5a is blue Z at t = 77, both triangle methods", T, float, double) {
     auto scene = note_scene::make<T>();
     const isin::Ray<T> ray{{0, 0, 0}, {0, 0, 1}}; // through (0,0,10)
     for (auto method : {isin::TriangleMethod::moller_trumbore, isin::TriangleMethod::area}) {
@@ -222,8 +221,7 @@ TEST_CASE("render_rows: bands rendered apart and stacked are the whole render, b
         CHECK_THROWS_AS((void)isin::render_rows(scene, cam, first, rows, opt), std::invalid_argument);
 }
 
-TEST_CASE_TEMPLATE("§11 render: both culling methods drop a triangle turned away from the eye", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§11 render: both culling methods drop a triangle turned away from the eye", T, float, double) {
     // Blue triangle Z of example 5a with two vertices swapped (counter-clockwise: a backface),
     // in front of a red wall.
     isin::Scene<T, isin::Triangle> scene;
@@ -276,8 +274,8 @@ TEST_CASE_TEMPLATE("§10 render: an image texture on a rectangle of two right tr
     CHECK(image(1, 1) == isin::Rgb8{0, 0, 0});         // background
 }
 
-TEST_CASE_TEMPLATE("scene: a placed mesh (its Bvh) and the same triangles one by one agree on hits, shadows, culling", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("scene: a placed mesh (its Bvh) and the same triangles one by one agree on hits, shadows, culling",
+                   T, float, double) {
     const auto sphere = workloads::icosphere<T>({0, 0, 40}, 10.0, 3); // 1280 triangles, closed
     isin::Scene<T, isin::Triangle> meshed, loose;
     meshed.add_mesh(sphere, meshed.add_material({}));
@@ -297,7 +295,8 @@ TEST_CASE_TEMPLATE("scene: a placed mesh (its Bvh) and the same triangles one by
             if (!b) continue;
             CHECK(a.geometry == 1); // kinds + 0: the first placement
             const auto p = isin::offset_origin(ray.at(b.t), loose.surface(ray, b).normal);
-            CHECK(double(isin::dot(meshed.surface(ray, a).normal, loose.surface(ray, b).normal)) == approx(1.0).epsilon(1e-4));
+            CHECK(double(isin::dot(meshed.surface(ray, a).normal, loose.surface(ray, b).normal)) ==
+                  approx(1.0).epsilon(1e-4));
             const isin::Ray<T> shadow{p, loose.lights[0].position - p};
             shadow_differ += meshed.transmittance(shadow, T(1)) != loose.transmittance(shadow, T(1));
         }
@@ -357,9 +356,12 @@ TEST_CASE("render: threads that cannot start leave their rows to the others, sam
     opt.threads = 1;
     const isin::Image reference = isin::render(scene, cam, opt);
     opt.threads = 4;
-    const WithoutThreads result = without_threads([&] { return isin::render(scene, cam, opt).pixels() == reference.pixels(); });
-    if (result == WithoutThreads::not_run) MESSAGE("not run: threads still start in a child under RLIMIT_NPROC = 0");
-    else CHECK(result == WithoutThreads::passed); // before: std::terminate (joinable threads destroyed)
+    const WithoutThreads result =
+        without_threads([&] { return isin::render(scene, cam, opt).pixels() == reference.pixels(); });
+    if (result == WithoutThreads::not_run)
+        MESSAGE("not run: threads still start in a child under RLIMIT_NPROC = 0");
+    else
+        CHECK(result == WithoutThreads::passed); // before: std::terminate (joinable threads destroyed)
 }
 
 TEST_CASE("render: an exception thrown in a worker (a user primitive) reaches the caller (D4)") {
@@ -377,7 +379,8 @@ TEST_CASE("render: an exception thrown in a worker (a user primitive) reaches th
     }
 }
 
-TEST_CASE("render and trace: a material or texture that does not exist is std::out_of_range, not a heap overflow (D5)") {
+TEST_CASE(
+    "render and trace: a material or texture that does not exist is std::out_of_range, not a heap overflow (D5)") {
     isin::Scene<float, isin::TexturedTriangle, isin::Sphere> scene;
     isin::Material<float> textured;
     textured.texture = 5; // no textures at all
@@ -421,7 +424,7 @@ TEST_CASE("render: max_depth is bounded; at the bound two facing mirrors render 
     isin::RenderStats stats;
     (void)isin::render(scene, cam, opt, &stats);
     CHECK(stats.reflection == std::uint64_t(16 * 9) * std::uint64_t(isin::RenderOptions::max_depth_limit));
-    CHECK_THROWS_AS((void)isin::trace(scene, isin::Ray<float>{{0, 0, 0}, {0, 0, 1}}, isin::RenderOptions::max_depth_limit + 1,
-                                      opt, stats),
+    CHECK_THROWS_AS((void)isin::trace(scene, isin::Ray<float>{{0, 0, 0}, {0, 0, 1}},
+                                      isin::RenderOptions::max_depth_limit + 1, opt, stats),
                     std::invalid_argument);
 }

@@ -24,7 +24,8 @@ template <class T>
 isin::Hit<T> intersect_primitive(const isin::Ray<T>& ray, const Cube<T>& c, isin::TriangleMethod) noexcept {
     T t0 = T(0), t1 = std::numeric_limits<T>::infinity();
     for (int a = 0; a < 3; ++a) {
-        const T o = isin::component(ray.origin, a), d = isin::component(ray.direction, a), c0 = isin::component(c.center, a);
+        const T o = isin::component(ray.origin, a), d = isin::component(ray.direction, a),
+                c0 = isin::component(c.center, a);
         const T n = (c0 - c.half - o) / d, f = (c0 + c.half - o) / d;
         t0 = std::max(t0, std::min(n, f)), t1 = std::min(t1, std::max(n, f));
     }
@@ -33,7 +34,8 @@ isin::Hit<T> intersect_primitive(const isin::Ray<T>& ray, const Cube<T>& c, isin
 template <class T>
 isin::Box<T> bounds(const Cube<T>& c) noexcept {
     isin::Box<T> b;
-    b.grow(c.center - isin::Vertex<T>{c.half, c.half, c.half}), b.grow(c.center + isin::Vertex<T>{c.half, c.half, c.half});
+    b.grow(c.center - isin::Vertex<T>{c.half, c.half, c.half}),
+        b.grow(c.center + isin::Vertex<T>{c.half, c.half, c.half});
     return b;
 }
 template <class T>
@@ -60,7 +62,8 @@ std::vector<isin::Ray<T>> view_rays(int w, int h) {
 
 } // namespace
 
-TEST_CASE_TEMPLATE("scene: spheres and a user's kind through their Bvh find what the plain loop finds", T, float, double) {
+TEST_CASE_TEMPLATE("scene: spheres and a user's kind through their Bvh find what the plain loop finds", T, float,
+                   double) {
     isin::Scene<T, isin::Sphere, user::Cube> scene;
     std::mt19937_64 rng(2);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -94,8 +97,8 @@ TEST_CASE_TEMPLATE("scene: spheres and a user's kind through their Bvh find what
     CHECK(partial > 20);
 }
 
-TEST_CASE_TEMPLATE("scene: shadow rays through a transparent mesh take its Bvh and multiply what the plain loop does", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("scene: shadow rays through a transparent mesh take its Bvh and multiply what the plain loop does",
+                   T, float, double) {
     // Before, one transparent triangle sent the whole kind's shadow rays to the one-by-one loop.
     const auto sphere = workloads::icosphere<T>({0, 0, 40}, 10.0, 3); // 1280 triangles, closed
     isin::Material<T> glass;
@@ -123,7 +126,8 @@ TEST_CASE_TEMPLATE("scene: placed meshes (rotated, scaled, mirrored, moved) hit 
     using X = isin::Transform<T>;
     const X home = X::translation({0, 0, 50});
     const std::vector<X> places = {X::translation({-10, 0, 40}) * home,
-                                   X::translation({0, 0, 45}) * X::rotation({1, 1, 0}, T(0.8)) * X::scaling({2, T(0.6), 1}) * home,
+                                   X::translation({0, 0, 45}) * X::rotation({1, 1, 0}, T(0.8)) *
+                                       X::scaling({2, T(0.6), 1}) * home,
                                    X::translation({10, 2, 40}) * X::scaling({-1, 1, 1}) * home, // mirrored
                                    X::translation({3, -6, 35}) * X::scaling(T(0.5)) * home};
     isin::Scene<T, isin::Triangle> placed, moved;
@@ -148,7 +152,9 @@ TEST_CASE_TEMPLATE("scene: placed meshes (rotated, scaled, mirrored, moved) hit 
         hits += bool(b);
         differ += bool(a) != bool(b) || (a && std::fabs(double(a.t) - double(b.t)) > 1e-4 * double(b.t));
         // the mirrored copy's world triangles are wound the other way: its normals differ in sign
-        if (a && b) normal_differ += std::fabs(isin::dot(placed.surface(ray, a).normal, moved.surface(ray, b).normal)) < T(0.999);
+        if (a && b)
+            normal_differ +=
+                std::fabs(isin::dot(placed.surface(ray, a).normal, moved.surface(ray, b).normal)) < T(0.999);
     }
     CHECK(hits > 150);
     CHECK(differ == 0);
@@ -171,7 +177,8 @@ TEST_CASE("scene: a thousand placements of a mesh hold one mesh; twenty meshes c
     const auto id = scene.add_mesh(sphere, scene.add_material({}));
     const std::size_t one = scene.memory();
     for (int i = 0; i < 1000; ++i)
-        scene.add_instance(id, isin::Transform<float>::translation({float(i % 40) * 3 - 60, float(i / 40) * 3 - 36, 100}));
+        scene.add_instance(id,
+                           isin::Transform<float>::translation({float(i % 40) * 3 - 60, float(i / 40) * 3 - 36, 100}));
     scene.commit();
     const std::size_t thousand = scene.memory();
     CHECK(thousand < one + 1000 * 400); // a placement: two transforms, a box, its share of the placements' Bvh
@@ -181,7 +188,8 @@ TEST_CASE("scene: a thousand placements of a mesh hold one mesh; twenty meshes c
     one_mesh.add_mesh(sphere, one_mesh.add_material({}));
     const auto m = groups.add_material({});
     for (std::size_t g = 0; g < 20; ++g)
-        groups.add_mesh(std::vector<isin::Triangle<float>>(sphere.begin() + long(g * 64), sphere.begin() + long(g * 64 + 64)), m);
+        groups.add_mesh(
+            std::vector<isin::Triangle<float>>(sphere.begin() + long(g * 64), sphere.begin() + long(g * 64 + 64)), m);
     groups.commit();
     int differ = 0;
     for (const auto& ray : view_rays<float>(64, 36)) {

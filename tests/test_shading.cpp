@@ -7,8 +7,7 @@
 
 #include <cmath>
 
-TEST_CASE_TEMPLATE("§7 example 7a: L = (0,0.8,−0.6), coefficient 0.8, red (255,0,0) → (204,0,0)", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§7 example 7a: L = (0,0.8,−0.6), coefficient 0.8, red (255,0,0) → (204,0,0)", T, float, double) {
     const isin::Vertex<T> light{0, 40, 0}, N{0, 1, 0}, P{0, 0, 30};
     const auto L = isin::normalize(light - P);
     CHECK(L.x == approx(0));
@@ -19,8 +18,7 @@ TEST_CASE_TEMPLATE("§7 example 7a: L = (0,0.8,−0.6), coefficient 0.8, red (25
     CHECK(isin::to_rgb8(isin::diffuse(N, L, red)) == isin::Rgb8{204, 0, 0});
 }
 
-TEST_CASE_TEMPLATE("§7 diffuse: a surface facing away from the light is unlit (coefficient 0)", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§7 diffuse: a surface facing away from the light is unlit (coefficient 0)", T, float, double) {
     const isin::Vertex<T> N{0, -1, 0};
     const auto L = isin::normalize(isin::Vertex<T>{0, 40, -30});
     CHECK(isin::dot(N, L) == approx(-0.8));
@@ -32,8 +30,7 @@ TEST_CASE_TEMPLATE("§7 diffuse: a surface facing away from the light is unlit (
 // L = (0,0.8,−0.6); d = −L = (0,−0.8,0.6); Rf = d − 2(d·N)N = (0,0.8,0.6);
 // V = normalize((0,30,60) − P) = (0,1,1)/√2; cos = (0.8 + 0.6)/√2 = 0.98994949;
 // shininess 10: 0.98994949^10 = 0.90392080.
-TEST_CASE_TEMPLATE("§7 specular by hand: Rf = (0,0.8,0.6), cos = 1.4/√2, cos^10 = 0.9039208", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§7 specular by hand: Rf = (0,0.8,0.6), cos = 1.4/√2, cos^10 = 0.9039208", T, float, double) {
     const isin::Vertex<T> N{0, 1, 0}, P{0, 0, 30};
     const auto L = isin::normalize(isin::Vertex<T>{0, 40, 0} - P);
     const auto V = isin::normalize(isin::Vertex<T>{0, 30, 60} - P);
@@ -52,8 +49,7 @@ TEST_CASE_TEMPLATE("§7 ambient: object colour × coefficient", T, float, double
     CHECK(isin::to_rgb8(c) == isin::Rgb8{51, 20, 0});
 }
 
-TEST_CASE_TEMPLATE("§7 Phong: ka·ambient + kd·diffuse + ks·specular with ka + kd + ks = 1", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§7 Phong: ka·ambient + kd·diffuse + ks·specular with ka + kd + ks = 1", T, float, double) {
     isin::Material<T> m;
     m.color = isin::from_rgb8<T>(255, 0, 0);
     m.ka = T(0.1), m.kd = T(0.6), m.ks = T(0.3), m.shininess = T(10);
@@ -75,8 +71,7 @@ TEST_CASE_TEMPLATE("§7 Phong: ka·ambient + kd·diffuse + ks·specular with ka 
     CHECK(isin::phong_light(m, m.color, -N, L, V, white) == isin::Color<T>{0, 0, 0});
 }
 
-TEST_CASE_TEMPLATE("§8 refraction by Snell's law: n1 sin θ1 = n2 sin θ2, total internal reflection",
-                   T, float, double) {
+TEST_CASE_TEMPLATE("§8 refraction by Snell's law: n1 sin θ1 = n2 sin θ2, total internal reflection", T, float, double) {
     const isin::Vertex<T> n{0, 1, 0};
     // Normal incidence goes straight through.
     const auto straight = isin::refract(isin::Vertex<T>{0, -1, 0}, n, T(1) / T(1.5));

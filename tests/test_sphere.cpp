@@ -62,8 +62,7 @@ TEST_CASE_TEMPLATE("§6 a non-unit direction measures t in multiples of |Rd|", T
 // (outward) it must not hit its own sphere at t ≈ 0; continuing inward it must reach the far side.
 // Primary rays from the eye hit spheres of radius r at 3r…1e3·r; the exact far-side distance is
 // computed in long double.
-TEST_CASE_TEMPLATE("§6/§8 ray restarted on the surface: no self-hit, far side found, r = 1e-2…1e4", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§6/§8 ray restarted on the surface: no self-hit, far side found, r = 1e-2…1e4", T, float, double) {
     std::mt19937 rng(20261123);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     for (T r : {T(1e-2), T(1), T(1e4)}) {
@@ -73,8 +72,7 @@ TEST_CASE_TEMPLATE("§6/§8 ray restarted on the surface: no self-hit, far side 
             const isin::Sphere<T> sp{{T(0.3) * r, T(-0.2) * r, distance * r}, r};
             int self_hits = 0, missed_exits = 0, bad_chords = 0, primaries = 0;
             for (int i = 0; i < 2000; ++i) {
-                const isin::Vertex<T> aim{sp.center.x + T(uni(rng)) * r,
-                                          sp.center.y + T(uni(rng)) * r, sp.center.z};
+                const isin::Vertex<T> aim{sp.center.x + T(uni(rng)) * r, sp.center.y + T(uni(rng)) * r, sp.center.z};
                 const isin::Ray<T> primary{{0, 0, 0}, isin::normalize(aim)};
                 const auto hit = isin::intersect(primary, sp);
                 if (!hit) continue;
@@ -94,9 +92,7 @@ TEST_CASE_TEMPLATE("§6/§8 ray restarted on the surface: no self-hit, far side 
                 const L chord = 2 * ((L(sp.center.x) - L(P.x)) * L(primary.direction.x) +
                                      (L(sp.center.y) - L(P.y)) * L(primary.direction.y) +
                                      (L(sp.center.z) - L(P.z)) * L(primary.direction.z));
-                if (chord > L(1e-3) * L(r) &&
-                    std::fabs(L(exit.t) - chord) > L(1e-2) * L(r))
-                    ++bad_chords;
+                if (chord > L(1e-3) * L(r) && std::fabs(L(exit.t) - chord) > L(1e-2) * L(r)) ++bad_chords;
             }
             CHECK(primaries > 1000);
             CHECK(self_hits == 0);
@@ -106,19 +102,17 @@ TEST_CASE_TEMPLATE("§6/§8 ray restarted on the surface: no self-hit, far side 
     }
 }
 
-TEST_CASE_TEMPLATE("bad input: zero/negative/NaN radius, NaN/inf rays, zero direction miss", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("bad input: zero/negative/NaN radius, NaN/inf rays, zero direction miss", T, float, double) {
     const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
     const isin::Ray<T> ok{{0, 0, 0}, {0, 0, 1}};
     REQUIRE(isin::intersect(ok, isin::Sphere<T>{{0, 0, 50}, 5}));
-    for (T radius : {T(0), T(-5), nan, -inf})
-        CHECK_FALSE(isin::intersect(ok, isin::Sphere<T>{{0, 0, 50}, radius}));
+    for (T radius : {T(0), T(-5), nan, -inf}) CHECK_FALSE(isin::intersect(ok, isin::Sphere<T>{{0, 0, 50}, radius}));
     CHECK_FALSE(isin::intersect(ok, isin::Sphere<T>{{0, nan, 50}, 5}));
     CHECK_FALSE(isin::intersect(ok, isin::Sphere<T>{{0, 0, inf}, 5}));
     const isin::Sphere<T> sp{{0, 0, 50}, 5};
     const isin::Ray<T> bad_rays[] = {
-        {{nan, 0, 0}, {0, 0, 1}}, {{0, 0, 0}, {0, nan, 1}},  {{0, 0, inf}, {0, 0, 1}},
-        {{0, 0, 0}, {0, 0, inf}}, {{0, 0, 0}, {0, 0, 0}},    {{0, 0, 50}, {0, 0, 0}},
+        {{nan, 0, 0}, {0, 0, 1}}, {{0, 0, 0}, {0, nan, 1}}, {{0, 0, inf}, {0, 0, 1}},
+        {{0, 0, 0}, {0, 0, inf}}, {{0, 0, 0}, {0, 0, 0}},   {{0, 0, 50}, {0, 0, 0}},
     };
     for (const auto& ray : bad_rays) CHECK_FALSE(isin::intersect(ray, sp));
     // An infinite radius is not a sphere either: no finite hit.
@@ -131,10 +125,10 @@ TEST_CASE_TEMPLATE("the comparison tests: textbook quadratic and Ray Tracing Gem
     const isin::Ray<T> ahead{{0, 0, 0}, {0, 0, 1}}, inside{{0, 0, 50}, {0, 0, 1}}, aside{{10, 0, 0}, {0, 0, 1}},
         behind{{0, 0, 60}, {0, 0, 1}}, scaled{{0, 0, 0}, {0, 0, 2}};
     for (const auto& test : {&isin::intersect_quadratic<T>, &isin::intersect_rtg<T>}) {
-        CHECK(test(ahead, sp).t == approx(45));   // §6: outside → s − q
-        CHECK(test(inside, sp).t == approx(5));   // §6: inside → s + q
-        CHECK_FALSE(test(aside, sp));             // §6: m2 > r2
-        CHECK_FALSE(test(behind, sp));            // §6: behind
+        CHECK(test(ahead, sp).t == approx(45));    // §6: outside → s − q
+        CHECK(test(inside, sp).t == approx(5));    // §6: inside → s + q
+        CHECK_FALSE(test(aside, sp));              // §6: m2 > r2
+        CHECK_FALSE(test(behind, sp));             // §6: behind
         CHECK(test(scaled, sp).t == approx(22.5)); // t in multiples of |Rd|
         CHECK_FALSE(test(ahead, isin::Sphere<T>{{0, 0, 50}, 0}));
         CHECK_FALSE(test(isin::Ray<T>{{0, 0, 0}, {0, 0, 0}}, sp));

@@ -54,13 +54,21 @@ Errors judge(const std::vector<workloads::TriangleCase<T>>& cases, Test test) {
 }
 
 template <class T>
-isin::Hit<T> watertight(const isin::Ray<T>& r, const isin::Triangle<T>& t) { return isin::intersect_watertight(r, t); }
+isin::Hit<T> watertight(const isin::Ray<T>& r, const isin::Triangle<T>& t) {
+    return isin::intersect_watertight(r, t);
+}
 template <class T>
-isin::Hit<T> moller_trumbore(const isin::Ray<T>& r, const isin::Triangle<T>& t) { return isin::intersect_moller_trumbore(r, t); }
+isin::Hit<T> moller_trumbore(const isin::Ray<T>& r, const isin::Triangle<T>& t) {
+    return isin::intersect_moller_trumbore(r, t);
+}
 template <class T>
-isin::Hit<T> area_relative(const isin::Ray<T>& r, const isin::Triangle<T>& t) { return isin::intersect_area(r, t); }
+isin::Hit<T> area_relative(const isin::Ray<T>& r, const isin::Triangle<T>& t) {
+    return isin::intersect_area(r, t);
+}
 template <class T>
-isin::Hit<T> area_note(const isin::Ray<T>& r, const isin::Triangle<T>& t) { return isin::intersect_area(r, t, T(0.005)); }
+isin::Hit<T> area_note(const isin::Ray<T>& r, const isin::Triangle<T>& t) {
+    return isin::intersect_area(r, t, T(0.005));
+}
 
 // isin's exact-at-any-scale triangle tests, for the loops below.
 template <class T>
@@ -80,8 +88,7 @@ TEST_CASE_TEMPLATE("stability, edges: the watertight test never leaks on a close
     CHECK(leaks(grid, area_relative<T>) == 0);
 }
 
-TEST_CASE_TEMPLATE("stability, edges: Möller–Trumbore leaks through shared edges (known failure)", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("stability, edges: Möller–Trumbore leaks through shared edges (known failure)", T, float, double) {
     // Measured: about 19% of rays aimed exactly at edges and vertices find no triangle, in float
     // and double, with g++ and clang++. Pinned to a band so a change in either direction shows.
     const auto sphere = workloads::closed_sphere_edges<T>(1500);
@@ -91,8 +98,7 @@ TEST_CASE_TEMPLATE("stability, edges: Möller–Trumbore leaks through shared ed
     CHECK(rate < 0.40);
 }
 
-TEST_CASE_TEMPLATE("stability, restart: isin's sphere test never self-intersects, r = 1e-3…1e6", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("stability, restart: isin's sphere test never self-intersects, r = 1e-3…1e6", T, float, double) {
     for (double r : {1e-3, 1e-1, 1e1, 1e3, 1e6})
         for (double offset : {0.0, 1e3, 1e6}) {
             if (offset * double(std::numeric_limits<T>::epsilon()) > 1e-3 * r) continue; // not representable
@@ -108,8 +114,7 @@ TEST_CASE_TEMPLATE("stability, restart: isin's sphere test never self-intersects
         }
 }
 
-TEST_CASE_TEMPLATE("stability, restart: the note's sphere test and its +0.001 fix (known failures)",
-                   T, float, double) {
+TEST_CASE_TEMPLATE("stability, restart: the note's sphere test and its +0.001 fix (known failures)", T, float, double) {
     struct Count {
         int self_hits = 0, bad_exits = 0;
     };
@@ -133,8 +138,10 @@ TEST_CASE_TEMPLATE("stability, restart: the note's sphere test and its +0.001 fi
     // … wrong for the reflected (outward) ray, which then hits its own sphere at t ≈ 0 …
     CHECK(count(1.0, T(0.001)).self_hits > 100);
     // … useless in float from r = 1e3, where 0.001 is below the rounding of l2 …
-    if (std::is_same_v<T, float>) CHECK(count(1e3, T(0.001)).bad_exits > 100);
-    else CHECK(count(1e3, T(0.001)).bad_exits == 0);
+    if (std::is_same_v<T, float>)
+        CHECK(count(1e3, T(0.001)).bad_exits > 100);
+    else
+        CHECK(count(1e3, T(0.001)).bad_exits == 0);
     // … and for small spheres 0.001 is a band hundreds of radii thick: a ray from 2r away counts
     // as starting inside and reports the far side.
     const isin::Sphere<T> tiny{{0, 0, T(0.002)}, T(0.001)};
@@ -144,8 +151,7 @@ TEST_CASE_TEMPLATE("stability, restart: the note's sphere test and its +0.001 fi
     CHECK(isin::intersect(from_outside, tiny).t == approx(0.001));
 }
 
-TEST_CASE_TEMPLATE("stability, scale: isin's tests are exact from 1e-4 to 1e6 in size, 1e7 away", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("stability, scale: isin's tests are exact from 1e-4 to 1e6 in size, 1e7 away", T, float, double) {
     for (double size : {1e-4, 1e-2, 1.0, 1e2, 1e4, 1e6}) {
         CAPTURE(size);
         const auto cases = workloads::scaled<T>(size, 0.0, 1000);

@@ -25,7 +25,7 @@ TEST_CASE_TEMPLATE("Transform: translation, scaling, rotation and their composit
     check_near(X::rotation({0, 0, 3}, quarter).vector({1, 0, 0}), isin::Vertex<T>{0, 1, 0}); // axis length ignored
     const X place = X::translation({1, 2, 3}) * X::rotation({0, 1, 0}, quarter) * X::scaling({2, 3, 4});
     check_near(place.point({1, 1, 1}), isin::Vertex<T>{1 + 4, 2 + 3, 3 - 2}); // scaled (2,3,4), turned (4,3,−2), moved
-    check_near(place.vector({1, 0, 0}), isin::Vertex<T>{0, 0, -2});          // directions are not moved
+    check_near(place.vector({1, 0, 0}), isin::Vertex<T>{0, 0, -2});           // directions are not moved
     CHECK(X::identity().is_identity());
     CHECK_FALSE(place.is_identity());
     CHECK(double(place.determinant()) == approx(24.0).epsilon(1e-5));

@@ -33,27 +33,23 @@ isin::Hit<T> run(const std::string& method, const isin::Ray<T>& ray, const isin:
     return isin::intersect_moller_trumbore(ray, tri);
 }
 
-const std::array<std::string, 3> methods{"area (note eps 0.005)", "area (scale-relative)",
-                                         "moller-trumbore"};
+const std::array<std::string, 3> methods{"area (note eps 0.005)", "area (scale-relative)", "moller-trumbore"};
 
 } // namespace
 
-TEST_CASE_TEMPLATE("§4 example 4a: plane D = 72 (unit N) or 432000 (raw N), t = 90, R = (0,0,90)", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§4 example 4a: plane D = 72 (unit N) or 432000 (raw N), t = 90, R = (0,0,90)", T, float, double) {
     const auto tri = note_triangle_2b<T>();
     const isin::Ray<T> ray{{0, 0, 0}, {0, 0, 1}};
     const auto N = isin::normal(tri);
     const auto unit_N = isin::normalize(N);
     CHECK(isin::plane_offset(unit_N, tri.v0) == approx(72));
     CHECK(isin::plane_offset(N, tri.v0) == T(432000));
-    CHECK(isin::ray_plane_t(ray, unit_N, isin::plane_offset(unit_N, tri.v0)) ==
-          approx(90)); // −72 / −0.8
+    CHECK(isin::ray_plane_t(ray, unit_N, isin::plane_offset(unit_N, tri.v0)) == approx(90)); // −72 / −0.8
     CHECK(isin::ray_plane_t(ray, N, isin::plane_offset(N, tri.v0)) == T(90));
     CHECK(ray.at(T(90)) == isin::Vertex<T>{0, 0, 90});
 }
 
-TEST_CASE_TEMPLATE("§4 example 4a: S = 6000, s1 = 1500, s2 = 1500, s3 = 3000 → inside", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§4 example 4a: S = 6000, s1 = 1500, s2 = 1500, s3 = 3000 → inside", T, float, double) {
     const auto tri = note_triangle_2b<T>();
     const auto a = isin::area_terms(tri, isin::Vertex<T>{0, 0, 90});
     CHECK(a.S == approx(6000));
@@ -72,8 +68,7 @@ TEST_CASE_TEMPLATE("§4 example 4a: S = 6000, s1 = 1500, s2 = 1500, s3 = 3000 �
     }
 }
 
-TEST_CASE_TEMPLATE("§4 plane: t < 0 is behind the ray, N·Rd = 0 is parallel — both miss", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§4 plane: t < 0 is behind the ray, N·Rd = 0 is parallel — both miss", T, float, double) {
     const auto tri = note_triangle_2b<T>();
     const isin::Ray<T> backwards{{0, 0, 0}, {0, 0, -1}};
     const isin::Ray<T> parallel{{0, 0, 0}, {1, 0, 0}}; // N = (0,3600,−4800): N·(1,0,0) = 0
@@ -86,8 +81,7 @@ TEST_CASE_TEMPLATE("§4 plane: t < 0 is behind the ray, N·Rd = 0 is parallel �
     }
 }
 
-TEST_CASE_TEMPLATE("§5 example 5a: t_U = 80, t_Y = 84, t_Z = 77 → the pixel is blue (Z)", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§5 example 5a: t_U = 80, t_Y = 84, t_Z = 77 → the pixel is blue (Z)", T, float, double) {
     const auto tris = note_triangles_5a<T>();
     const isin::Ray<T> ray{{0, 0, 0}, isin::normalize(isin::Vertex<T>{0, 0, 10})};
     const std::array<T, 3> expected{80, 84, 77};
@@ -105,8 +99,7 @@ TEST_CASE_TEMPLATE("§5 example 5a: t_U = 80, t_Y = 84, t_Z = 77 → the pixel i
     }
 }
 
-TEST_CASE_TEMPLATE("§10 Möller–Trumbore barycentrics: P = V0 + u(V1−V0) + v(V2−V0)", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§10 Möller–Trumbore barycentrics: P = V0 + u(V1−V0) + v(V2−V0)", T, float, double) {
     const auto tris = note_triangles_5a<T>();
     const T chosen[][2] = {{T(0.2), T(0.3)}, {T(0.6), T(0.1)}, {T(0.05), T(0.9)}, {T(0.33), T(0.33)}};
     for (const auto& tri : tris)
@@ -126,8 +119,7 @@ TEST_CASE_TEMPLATE("§10 Möller–Trumbore barycentrics: P = V0 + u(V1−V0) + 
         }
 }
 
-TEST_CASE_TEMPLATE("§11 Möller–Trumbore backface culling keeps clockwise (front) faces only", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§11 Möller–Trumbore backface culling keeps clockwise (front) faces only", T, float, double) {
     const isin::Ray<T> ray{{0, 0, 0}, {0, 0, 1}};
     for (const auto& tri : note_triangles_5a<T>()) {
         const isin::Triangle<T> flipped{tri.v0, tri.v2, tri.v1};
@@ -141,8 +133,7 @@ TEST_CASE_TEMPLATE("§11 Möller–Trumbore backface culling keeps clockwise (fr
 
 // Example 4a's triangle scaled by `scale` about the origin, and rays from the origin at the centroid
 // and at a point 1% of the triangle's size outside the edge V1V2.
-TEST_CASE_TEMPLATE("§4 stability: scale-relative area test and MT work from size 1e-3 to 1e5", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§4 stability: scale-relative area test and MT work from size 1e-3 to 1e5", T, float, double) {
     for (T scale : {T(1e-5), T(1e-3), T(1), T(1e3)}) { // triangle sides 1e-3 … 1e5
         CAPTURE(scale);
         const auto base = note_triangle_2b<T>();
@@ -170,13 +161,12 @@ TEST_CASE_TEMPLATE("§4 known failure: the note's absolute ε = 0.005 swallows t
     const auto centroid = (tri.v0 + tri.v1 + tri.v2) / T(3);
     const auto far_outside = centroid + (tri.v1 - tri.v0) * T(2);
     const isin::Ray<T> ray{{0, 0, 0}, isin::normalize(far_outside)};
-    CHECK(isin::intersect_area(ray, tri, T(0.005)));  // documented false hit
+    CHECK(isin::intersect_area(ray, tri, T(0.005))); // documented false hit
     CHECK_FALSE(isin::intersect_area(ray, tri));
     CHECK_FALSE(isin::intersect_moller_trumbore(ray, tri));
 }
 
-TEST_CASE_TEMPLATE("bad input: NaN/inf rays, zero directions and degenerate triangles miss", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("bad input: NaN/inf rays, zero directions and degenerate triangles miss", T, float, double) {
     const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
     const auto good = note_triangle_2b<T>();
     const isin::Ray<T> ok{{0, 0, 0}, {0, 0, 1}};
@@ -185,12 +175,12 @@ TEST_CASE_TEMPLATE("bad input: NaN/inf rays, zero directions and degenerate tria
         {{0, 0, 0}, {0, 0, inf}}, {{0, 0, 0}, {0, 0, 0}},   {{-inf, 0, 0}, {1, 0, 1}},
     };
     const isin::Triangle<T> bad_tris[] = {
-        {{1, 1, 50}, {1, 1, 50}, {1, 1, 50}},                 // a point
-        {{-1, -1, 50}, {1, 1, 50}, {3, 3, 50}},               // collinear, through the ray
-        {{0, -1, 40}, {0, 0, 50}, {0, 2, 70}},                // collinear, in a plane of the ray
-        {{-1, -1, 50}, {1, -1, 50}, {1, 1, 50}},              // good …
-        {{-1, -1, nan}, {1, -1, 50}, {1, 1, 50}},             // … with a NaN vertex
-        {{-inf, -1, 50}, {1, -1, 50}, {1, 1, 50}},            // … with an infinite vertex
+        {{1, 1, 50}, {1, 1, 50}, {1, 1, 50}},      // a point
+        {{-1, -1, 50}, {1, 1, 50}, {3, 3, 50}},    // collinear, through the ray
+        {{0, -1, 40}, {0, 0, 50}, {0, 2, 70}},     // collinear, in a plane of the ray
+        {{-1, -1, 50}, {1, -1, 50}, {1, 1, 50}},   // good …
+        {{-1, -1, nan}, {1, -1, 50}, {1, 1, 50}},  // … with a NaN vertex
+        {{-inf, -1, 50}, {1, -1, 50}, {1, 1, 50}}, // … with an infinite vertex
     };
     const isin::Ray<T> forward{{0, 0, 0}, {0, 0, 1}};
     for (const auto& m : methods) {
@@ -199,8 +189,10 @@ TEST_CASE_TEMPLATE("bad input: NaN/inf rays, zero directions and degenerate tria
         for (const auto& ray : bad_rays) CHECK_FALSE(run(m, ray, good));
         for (size_t i = 0; i < std::size(bad_tris); ++i) {
             CAPTURE(i);
-            if (i == 3) CHECK(run(m, forward, bad_tris[i]));
-            else CHECK_FALSE(run(m, forward, bad_tris[i]));
+            if (i == 3)
+                CHECK(run(m, forward, bad_tris[i]));
+            else
+                CHECK_FALSE(run(m, forward, bad_tris[i]));
         }
     }
 }

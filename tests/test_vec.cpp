@@ -39,12 +39,10 @@ TEST_CASE_TEMPLATE("§2 dot and cross products, left-handed frame", T, float, do
     CHECK(isin::cross(y, z) == x);
     CHECK(isin::cross(z, x) == y);
     CHECK(isin::dot(isin::Vertex<T>{1, 2, 3}, isin::Vertex<T>{4, -5, 6}) == T(12));
-    CHECK(isin::cross(isin::Vertex<T>{1, 2, 3}, isin::Vertex<T>{4, -5, 6}) ==
-          isin::Vertex<T>{27, 6, -13});
+    CHECK(isin::cross(isin::Vertex<T>{1, 2, 3}, isin::Vertex<T>{4, -5, 6}) == isin::Vertex<T>{27, 6, -13});
 }
 
-TEST_CASE_TEMPLATE("§2 example 2a: |(0,6,8)| = 10, normalized (0, 0.6, 0.8) of length 1", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§2 example 2a: |(0,6,8)| = 10, normalized (0, 0.6, 0.8) of length 1", T, float, double) {
     const isin::Vertex<T> R{0, 6, 8};
     CHECK(isin::length(R) == T(10));
     const auto n = isin::normalize(R);
@@ -52,8 +50,7 @@ TEST_CASE_TEMPLATE("§2 example 2a: |(0,6,8)| = 10, normalized (0, 0.6, 0.8) of 
     CHECK(isin::length(n) == approx(1));
 }
 
-TEST_CASE_TEMPLATE("§2 example 2b: triangle normal N = (0,3600,−4800), unit (0,0.6,−0.8)", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§2 example 2b: triangle normal N = (0,3600,−4800), unit (0,0.6,−0.8)", T, float, double) {
     const isin::Triangle<T> tri{{0, 40, 120}, {30, -40, 60}, {-30, -40, 60}};
     CHECK(tri.v1 - tri.v0 == isin::Vertex<T>{30, -80, -60});
     CHECK(tri.v2 - tri.v0 == isin::Vertex<T>{-30, -80, -60});
@@ -62,8 +59,7 @@ TEST_CASE_TEMPLATE("§2 example 2b: triangle normal N = (0,3600,−4800), unit (
     check_vertex(isin::normalize(N), T(0), T(0.6), T(-0.8));
 }
 
-TEST_CASE_TEMPLATE("§11 example 11a: vertex order flips the normal (0,6400,0) ↔ (0,−6400,0)", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("§11 example 11a: vertex order flips the normal (0,6400,0) ↔ (0,−6400,0)", T, float, double) {
     const isin::Triangle<T> first{{0, 0, 40}, {40, 0, -40}, {-40, 0, -40}};
     const isin::Triangle<T> reordered{{40, 0, -40}, {0, 0, 40}, {-40, 0, -40}};
     CHECK(isin::normal(first) == isin::Vertex<T>{0, 6400, 0});
@@ -79,8 +75,7 @@ TEST_CASE_TEMPLATE("§8 reflect: d − 2(d·n)n mirrors about the normal", T, fl
     CHECK(isin::length(r) == approx(1));
 }
 
-TEST_CASE_TEMPLATE("§2 bad input: normalize of zero, infinite or NaN vectors is (0,0,0)", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("§2 bad input: normalize of zero, infinite or NaN vectors is (0,0,0)", T, float, double) {
     const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
     const isin::Vertex<T> zero{0, 0, 0};
     CHECK(isin::normalize(zero) == zero);

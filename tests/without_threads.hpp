@@ -28,8 +28,7 @@ WithoutThreads without_threads(Check check) {
             std::thread t([] {});
             t.join();
             ::_exit(77); // threads still start: this check cannot be made here
-        } catch (const std::exception&) {
-        }
+        } catch (const std::exception&) {}
         bool ok = false;
         try {
             ok = check();
@@ -40,8 +39,7 @@ WithoutThreads without_threads(Check check) {
         ::_exit(ok ? 0 : 1);
     }
     int status = 0;
-    while (::waitpid(pid, &status, 0) < 0) {
-    }
+    while (::waitpid(pid, &status, 0) < 0) {}
     if (!WIFEXITED(status)) return WithoutThreads::crashed;
     switch (WEXITSTATUS(status)) {
     case 0: return WithoutThreads::passed;

@@ -43,8 +43,7 @@ template <class T>
 
 /// Baldwin–Weber test: t where w(Ro + t·Rd) = 0, then u and v of that point. Two-sided.
 template <class T>
-[[nodiscard]] inline Hit<T> intersect_baldwin_weber(const Ray<T>& ray,
-                                                    const BaldwinWeberTriangle<T>& bw) noexcept {
+[[nodiscard]] inline Hit<T> intersect_baldwin_weber(const Ray<T>& ray, const BaldwinWeberTriangle<T>& bw) noexcept {
     const T w_origin = dot(bw.row_w, ray.origin) + bw.off_w; // BW: w of Ro
     const T w_direction = dot(bw.row_w, ray.direction);      // BW: dw/dt
     const T t = -w_origin / w_direction;                     // BW: w(t) = 0

@@ -77,29 +77,33 @@ public:
 
 private:
     // One block of Möller–Trumbore (§10), branch-free: a miss leaves t = +∞ in its lane.
-    void test_block(const Ray<T>& ray, std::size_t base, T t_max, T* __restrict t_out,
-                    T* __restrict u_out, T* __restrict v_out) const noexcept {
+    void test_block(const Ray<T>& ray, std::size_t base, T t_max, T* __restrict t_out, T* __restrict u_out,
+                    T* __restrict v_out) const noexcept {
         const T ox = ray.origin.x, oy = ray.origin.y, oz = ray.origin.z;
         const T dx = ray.direction.x, dy = ray.direction.y, dz = ray.direction.z;
-        const T* __restrict v0x = v0x_.data() + base; const T* __restrict v0y = v0y_.data() + base;
-        const T* __restrict v0z = v0z_.data() + base; const T* __restrict e1x = e1x_.data() + base;
-        const T* __restrict e1y = e1y_.data() + base; const T* __restrict e1z = e1z_.data() + base;
-        const T* __restrict e2x = e2x_.data() + base; const T* __restrict e2y = e2y_.data() + base;
+        const T* __restrict v0x = v0x_.data() + base;
+        const T* __restrict v0y = v0y_.data() + base;
+        const T* __restrict v0z = v0z_.data() + base;
+        const T* __restrict e1x = e1x_.data() + base;
+        const T* __restrict e1y = e1y_.data() + base;
+        const T* __restrict e1z = e1z_.data() + base;
+        const T* __restrict e2x = e2x_.data() + base;
+        const T* __restrict e2y = e2y_.data() + base;
         const T* __restrict e2z = e2z_.data() + base;
         constexpr T inf = std::numeric_limits<T>::infinity();
         for (std::size_t k = 0; k < block; ++k) {
-            const T px = dy * e2z[k] - dz * e2y[k];                         // MT: P = Rd × E2
+            const T px = dy * e2z[k] - dz * e2y[k]; // MT: P = Rd × E2
             const T py = dz * e2x[k] - dx * e2z[k];
             const T pz = dx * e2y[k] - dy * e2x[k];
-            const T det = e1x[k] * px + e1y[k] * py + e1z[k] * pz;          // MT: det = E1·P
-            const T inv = T(1) / det;                                       // ±∞ or NaN when det = 0
-            const T sx = ox - v0x[k], sy = oy - v0y[k], sz = oz - v0z[k];   // MT: S = Ro − V0
-            const T u = (sx * px + sy * py + sz * pz) * inv;                // MT: u = S·P / det
-            const T qx = sy * e1z[k] - sz * e1y[k];                         // MT: Q = S × E1
+            const T det = e1x[k] * px + e1y[k] * py + e1z[k] * pz;        // MT: det = E1·P
+            const T inv = T(1) / det;                                     // ±∞ or NaN when det = 0
+            const T sx = ox - v0x[k], sy = oy - v0y[k], sz = oz - v0z[k]; // MT: S = Ro − V0
+            const T u = (sx * px + sy * py + sz * pz) * inv;              // MT: u = S·P / det
+            const T qx = sy * e1z[k] - sz * e1y[k];                       // MT: Q = S × E1
             const T qy = sz * e1x[k] - sx * e1z[k];
             const T qz = sx * e1y[k] - sy * e1x[k];
-            const T v = (dx * qx + dy * qy + dz * qz) * inv;                // MT: v = Rd·Q / det
-            const T tt = (e2x[k] * qx + e2y[k] * qy + e2z[k] * qz) * inv;   // MT: t = E2·Q / det
+            const T v = (dx * qx + dy * qy + dz * qz) * inv;              // MT: v = Rd·Q / det
+            const T tt = (e2x[k] * qx + e2y[k] * qy + e2z[k] * qz) * inv; // MT: t = E2·Q / det
             const bool hit = (u >= T(0)) & (v >= T(0)) & (u + v <= T(1)) & (tt > T(0)) & (tt < t_max);
             t_out[k] = hit ? tt : inf;
             u_out[k] = u;

@@ -34,11 +34,10 @@ public:
 
     /// A camera at `eye` turned to look at `target` (yaw and pitch from the direction; no roll).
     /// If eye and target coincide or are not finite, it looks along +Z.
-    [[nodiscard]] static Camera look_at(int width, int height, const Vertex<T>& eye,
-                                        const Vertex<T>& target) {
+    [[nodiscard]] static Camera look_at(int width, int height, const Vertex<T>& eye, const Vertex<T>& target) {
         const Vertex<T> d = normalize(target - eye);
-        const T yaw = std::atan2(d.x, d.z);                       // +Z → 0, +X → +90°
-        const T pitch = std::asin(std::clamp(d.y, T(-1), T(1)));  // up is positive
+        const T yaw = std::atan2(d.x, d.z);                      // +Z → 0, +X → +90°
+        const T pitch = std::asin(std::clamp(d.y, T(-1), T(1))); // up is positive
         return Camera(width, height, eye, d == Vertex<T>{} ? T(0) : yaw, pitch);
     }
 
@@ -87,8 +86,8 @@ public:
     /// The image-plane point GD of pixel (x, y) (§3): (16·x/(W−1) − 8, 4.5 − 9·y/(H−1), 10) in
     /// the camera's frame, moved to world space by the pose. Fractional x, y address sub-pixels.
     [[nodiscard]] Vertex<T> image_point(T x, T y) const noexcept {
-        const T gx = plane_width * x / T(width_ - 1) - plane_width / T(2);   // §3: 16·x/(W−1) − 8
-        const T gy = plane_height / T(2) - plane_height * y / T(height_ - 1); // §3: 4.5 − 9·y/(H−1)
+        const T gx = plane_width * x / T(width_ - 1) - plane_width / T(2);     // §3: 16·x/(W−1) − 8
+        const T gy = plane_height / T(2) - plane_height * y / T(height_ - 1);  // §3: 4.5 − 9·y/(H−1)
         return position_ + gx * right_ + gy * up_ + plane_distance * forward_; // §3: GD, z = 10
     }
 
@@ -100,9 +99,8 @@ public:
 private:
     static int checked_side(int side, const char* what) {
         if (side < 2 || side > max_side)
-            throw std::invalid_argument(std::string("isin::Camera: image ") + what + " " +
-                                        std::to_string(side) + " is outside [2, " +
-                                        std::to_string(max_side) + "]");
+            throw std::invalid_argument(std::string("isin::Camera: image ") + what + " " + std::to_string(side) +
+                                        " is outside [2, " + std::to_string(max_side) + "]");
         return side;
     }
 

@@ -13,22 +13,56 @@ struct Color {
     static_assert(std::is_floating_point_v<T>, "isin::Color needs a floating-point type");
     T r, g, b;
 
-    constexpr Color& operator+=(const Color& c) noexcept { r += c.r; g += c.g; b += c.b; return *this; }
-    constexpr Color& operator*=(T s) noexcept { r *= s; g *= s; b *= s; return *this; }
+    constexpr Color& operator+=(const Color& c) noexcept {
+        r += c.r;
+        g += c.g;
+        b += c.b;
+        return *this;
+    }
+    constexpr Color& operator*=(T s) noexcept {
+        r *= s;
+        g *= s;
+        b *= s;
+        return *this;
+    }
 };
 
 using Colorf = Color<float>;
 using Colord = Color<double>;
 
-template <class T> constexpr Color<T> operator+(const Color<T>& a, const Color<T>& b) noexcept { return {a.r + b.r, a.g + b.g, a.b + b.b}; }
-template <class T> constexpr Color<T> operator-(const Color<T>& a, const Color<T>& b) noexcept { return {a.r - b.r, a.g - b.g, a.b - b.b}; }
+template <class T>
+constexpr Color<T> operator+(const Color<T>& a, const Color<T>& b) noexcept {
+    return {a.r + b.r, a.g + b.g, a.b + b.b};
+}
+template <class T>
+constexpr Color<T> operator-(const Color<T>& a, const Color<T>& b) noexcept {
+    return {a.r - b.r, a.g - b.g, a.b - b.b};
+}
 /// Component-wise product: a surface colour lit by a light colour.
-template <class T> constexpr Color<T> operator*(const Color<T>& a, const Color<T>& b) noexcept { return {a.r * b.r, a.g * b.g, a.b * b.b}; }
-template <class T> constexpr Color<T> operator*(const Color<T>& a, T s) noexcept { return {a.r * s, a.g * s, a.b * s}; }
-template <class T> constexpr Color<T> operator*(T s, const Color<T>& a) noexcept { return {s * a.r, s * a.g, s * a.b}; }
-template <class T> constexpr Color<T> operator/(const Color<T>& a, T s) noexcept { return {a.r / s, a.g / s, a.b / s}; }
-template <class T> constexpr bool operator==(const Color<T>& a, const Color<T>& b) noexcept { return a.r == b.r && a.g == b.g && a.b == b.b; }
-template <class T> constexpr bool operator!=(const Color<T>& a, const Color<T>& b) noexcept { return !(a == b); }
+template <class T>
+constexpr Color<T> operator*(const Color<T>& a, const Color<T>& b) noexcept {
+    return {a.r * b.r, a.g * b.g, a.b * b.b};
+}
+template <class T>
+constexpr Color<T> operator*(const Color<T>& a, T s) noexcept {
+    return {a.r * s, a.g * s, a.b * s};
+}
+template <class T>
+constexpr Color<T> operator*(T s, const Color<T>& a) noexcept {
+    return {s * a.r, s * a.g, s * a.b};
+}
+template <class T>
+constexpr Color<T> operator/(const Color<T>& a, T s) noexcept {
+    return {a.r / s, a.g / s, a.b / s};
+}
+template <class T>
+constexpr bool operator==(const Color<T>& a, const Color<T>& b) noexcept {
+    return a.r == b.r && a.g == b.g && a.b == b.b;
+}
+template <class T>
+constexpr bool operator!=(const Color<T>& a, const Color<T>& b) noexcept {
+    return !(a == b);
+}
 
 /// An 8-bit RGB pixel, as stored in images and in the note's examples, e.g. red (255,0,0).
 struct Rgb8 {

@@ -27,8 +27,7 @@ template <class T>
 /// triangle that reaches behind the eye the projection is meaningless and method 1 decides.
 template <class T>
 [[nodiscard]] constexpr bool is_backface_projected(const Triangle<T>& tri, T d = T(10)) noexcept {
-    if (!(tri.v0.z > T(0) && tri.v1.z > T(0) && tri.v2.z > T(0)))
-        return is_backface(tri, Vertex<T>{T(0), T(0), T(0)});
+    if (!(tri.v0.z > T(0) && tri.v1.z > T(0) && tri.v2.z > T(0))) return is_backface(tri, Vertex<T>{T(0), T(0), T(0)});
     const auto p0 = project(tri.v0, d), p1 = project(tri.v1, d), p2 = project(tri.v2, d);
     const T ax = p1[0] - p0[0], ay = p1[1] - p0[1], bx = p2[0] - p0[0], by = p2[1] - p0[1];
     return ax * by - ay * bx > T(0); // §11: Z of the projected cross product > 0 → backface

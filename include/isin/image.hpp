@@ -47,9 +47,8 @@ public:
 private:
     static int checked_side(int side, const char* what) {
         if (side < 1 || side > max_side)
-            throw std::invalid_argument(std::string("isin::Image: ") + what + " " +
-                                        std::to_string(side) + " is outside [1, " +
-                                        std::to_string(max_side) + "]");
+            throw std::invalid_argument(std::string("isin::Image: ") + what + " " + std::to_string(side) +
+                                        " is outside [1, " + std::to_string(max_side) + "]");
         return side;
     }
     [[nodiscard]] std::size_t index(int x, int y) const noexcept {
@@ -57,9 +56,8 @@ private:
     }
     [[nodiscard]] std::size_t checked_index(int x, int y) const {
         if (x < 0 || x >= width_ || y < 0 || y >= height_)
-            throw std::out_of_range("isin::Image::at: pixel (" + std::to_string(x) + ", " +
-                                    std::to_string(y) + ") is outside the " +
-                                    std::to_string(width_) + "×" + std::to_string(height_) +
+            throw std::out_of_range("isin::Image::at: pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                    ") is outside the " + std::to_string(width_) + "×" + std::to_string(height_) +
                                     " image");
         return index(x, y);
     }

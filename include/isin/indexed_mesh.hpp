@@ -24,11 +24,11 @@ namespace isin {
 template <class T>
 struct Mesh {
     static_assert(std::is_floating_point_v<T>, "isin::Mesh needs a floating-point type");
-    std::vector<Vertex<T>> positions;                 ///< each vertex once
+    std::vector<Vertex<T>> positions;                  ///< each vertex once
     std::vector<std::array<std::uint32_t, 3>> indices; ///< triangles: indices into positions (V0, V1, V2)
-    std::vector<Vertex<T>> normals;                   ///< per vertex, or empty
-    std::vector<std::array<T, 2>> uvs;                ///< per vertex texture coordinates, or empty
-    std::vector<std::uint32_t> material;              ///< per triangle material ids, or empty
+    std::vector<Vertex<T>> normals;                    ///< per vertex, or empty
+    std::vector<std::array<T, 2>> uvs;                 ///< per vertex texture coordinates, or empty
+    std::vector<std::uint32_t> material;               ///< per triangle material ids, or empty
 
     /// Number of triangles.
     [[nodiscard]] std::size_t size() const noexcept { return indices.size(); }
@@ -68,7 +68,8 @@ struct Mesh {
         if (!uvs.empty() && uvs.size() != positions.size())
             fail(std::to_string(uvs.size()) + " uvs for " + std::to_string(positions.size()) + " vertices");
         if (!material.empty() && material.size() != indices.size())
-            fail(std::to_string(material.size()) + " material ids for " + std::to_string(indices.size()) + " triangles");
+            fail(std::to_string(material.size()) + " material ids for " + std::to_string(indices.size()) +
+                 " triangles");
     }
 };
 

@@ -74,11 +74,11 @@ template <class T>
 template <class T>
 [[nodiscard]] std::vector<Triangle<T>> load_mesh(const std::string& path, const ReadLimits& limits = {});
 
-#define ISIN_DETAIL_MESH_IO(T)                                                                            \
-    extern template std::vector<Triangle<T>> load_obj<T>(const std::string&, const ReadLimits&);         \
-    extern template std::vector<Triangle<T>> load_ply<T>(const std::string&, const ReadLimits&);         \
-    extern template std::vector<Triangle<T>> load_mesh_from_memory<T>(const void*, std::size_t, MeshFormat, \
-                                                                       const std::string&);              \
+#define ISIN_DETAIL_MESH_IO(T)                                                                                         \
+    extern template std::vector<Triangle<T>> load_obj<T>(const std::string&, const ReadLimits&);                       \
+    extern template std::vector<Triangle<T>> load_ply<T>(const std::string&, const ReadLimits&);                       \
+    extern template std::vector<Triangle<T>> load_mesh_from_memory<T>(const void*, std::size_t, MeshFormat,            \
+                                                                      const std::string&);                             \
     extern template std::vector<Triangle<T>> load_mesh<T>(const std::string&, const ReadLimits&);
 ISIN_DETAIL_MESH_IO(float)
 ISIN_DETAIL_MESH_IO(double)

@@ -15,8 +15,7 @@ namespace isin {
 /// A fixed distance instead (1e-4, say) is too small far from the origin and too large for small
 /// objects. Returns p unchanged when p or n is not finite.
 template <class T>
-[[nodiscard]] inline Vertex<T> offset_origin(const Vertex<T>& p, const Vertex<T>& n,
-                                             T scale = T(0)) noexcept {
+[[nodiscard]] inline Vertex<T> offset_origin(const Vertex<T>& p, const Vertex<T>& n, T scale = T(0)) noexcept {
     if (!is_finite(p) || !is_finite(n)) return p;
     constexpr T eps = std::numeric_limits<T>::epsilon();
     const T magnitude = max_of(max_of(max_abs(p), scale), T(1) / T(32));

@@ -52,7 +52,10 @@ struct RenderStats {
     [[nodiscard]] std::uint64_t rays() const noexcept { return primary + shadow + reflection + refraction; }
     [[nodiscard]] double mrays_per_second() const noexcept { return seconds > 0 ? double(rays()) / seconds * 1e-6 : 0; }
     RenderStats& operator+=(const RenderStats& o) noexcept {
-        primary += o.primary; shadow += o.shadow; reflection += o.reflection; refraction += o.refraction;
+        primary += o.primary;
+        shadow += o.shadow;
+        reflection += o.reflection;
+        refraction += o.refraction;
         return *this;
     }
 };
@@ -74,7 +77,7 @@ template <class T, template <class> class... S>
         for (std::size_t i = 0; i < objects.size(); ++i) {
             const Triangle<T>& tri = *triangle_of(objects[i].shape);
             mask[i] = culling == Culling::dot_product
-                          ? is_backface(tri, cam.position())                                  // §11 method 1
+                          ? is_backface(tri, cam.position())                                      // §11 method 1
                           : is_backface_projected(to_camera_space(cam, tri), cam.plane_distance); // §11 method 2
         }
     });
@@ -90,10 +93,10 @@ namespace detail {
 /// The colour seen along `ray` (unit direction): nearest hit (§5), Phong with shadows (§7, §9),
 /// reflection and transmission (§8) up to `max_depth`. `skip` culls objects (primary rays only).
 template <class T, template <class> class... S>
-[[nodiscard]] Color<T> trace(const Scene<T, S...>& scene, const Ray<T>& ray, int depth,
-                             const RenderOptions& opt, RenderStats& stats,
-                             const typename Scene<T, S...>::Culled* skip = nullptr) {
-    if (depth > RenderOptions::max_depth_limit) detail::throw_too_deep(depth); // render() checks opt.max_depth; this bounds direct calls too
+[[nodiscard]] Color<T> trace(const Scene<T, S...>& scene, const Ray<T>& ray, int depth, const RenderOptions& opt,
+                             RenderStats& stats, const typename Scene<T, S...>::Culled* skip = nullptr) {
+    if (depth > RenderOptions::max_depth_limit)
+        detail::throw_too_deep(depth); // render() checks opt.max_depth; this bounds direct calls too
     const Hit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
     if (!sh) return scene.background;
     const SurfacePoint<T> sp = scene.surface(ray, sh);
@@ -104,10 +107,10 @@ template <class T, template <class> class... S>
     const Vertex<T>& d = ray.direction;
     const bool entering = dot(sp.normal, d) < T(0);
     const Vertex<T> Nf = entering ? sp.normal : -sp.normal; // the normal on the ray's side
-    const Vertex<T> V = -d;                                  // §7: towards the eye
+    const Vertex<T> V = -d;                                 // §7: towards the eye
 
     Color<T> local = m.ka * object * scene.ambient_light; // §7: ambient
-    const T scale = max_abs(ray.origin); // the hit point's rounding grows with it
+    const T scale = max_abs(ray.origin);                  // the hit point's rounding grows with it
     const Vertex<T> above = offset_origin(sp.point, Nf, scale);
     for (const PointLight<T>& light : scene.lights) {
         const Vertex<T> to_light = light.position - sp.point;
@@ -132,8 +135,10 @@ template <class T, template <class> class... S>
         bool reflected = false;
         if (m.ior != T(1)) {
             const T eta = entering ? T(1) / m.ior : m.ior; // n1/n2
-            if (const auto r = refract(d, Nf, eta)) dir = normalize(*r);
-            else dir = reflect(d, Nf), reflected = true; // total internal reflection
+            if (const auto r = refract(d, Nf, eta))
+                dir = normalize(*r);
+            else
+                dir = reflect(d, Nf), reflected = true; // total internal reflection
         }
         ++stats.refraction;
         const Vertex<T> origin = reflected ? above : offset_origin(sp.point, -Nf, scale);
@@ -172,8 +177,7 @@ template <class T, template <class> class... S>
                                 const RenderOptions& opt = {}, RenderStats* stats_out = nullptr) {
     if (opt.samples < 1 || opt.samples > 16)
         throw std::invalid_argument("isin::render: samples " + std::to_string(opt.samples) + " is outside [1, 16]");
-    if (opt.threads < 0)
-        throw std::invalid_argument("isin::render: threads must not be negative");
+    if (opt.threads < 0) throw std::invalid_argument("isin::render: threads must not be negative");
     if (opt.max_depth < 0 || opt.max_depth > RenderOptions::max_depth_limit)
         throw std::invalid_argument("isin::render: max_depth " + std::to_string(opt.max_depth) + " is outside [0, " +
                                     std::to_string(RenderOptions::max_depth_limit) + "]");

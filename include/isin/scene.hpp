@@ -115,15 +115,27 @@ template <class T>
 }
 
 /// The plain triangle of a triangle-like primitive (for culling); spheres have none.
-template <class T> [[nodiscard]] constexpr const Triangle<T>* triangle_of(const Triangle<T>& t) noexcept { return &t; }
-template <class T> [[nodiscard]] constexpr const Triangle<T>* triangle_of(const TexturedTriangle<T>& t) noexcept { return &t.triangle; }
-template <class T> [[nodiscard]] constexpr const Triangle<T>* triangle_of(const Sphere<T>&) noexcept { return nullptr; }
+template <class T>
+[[nodiscard]] constexpr const Triangle<T>* triangle_of(const Triangle<T>& t) noexcept {
+    return &t;
+}
+template <class T>
+[[nodiscard]] constexpr const Triangle<T>* triangle_of(const TexturedTriangle<T>& t) noexcept {
+    return &t.triangle;
+}
+template <class T>
+[[nodiscard]] constexpr const Triangle<T>* triangle_of(const Sphere<T>&) noexcept {
+    return nullptr;
+}
 
 /// Whether a primitive kind is a triangle: a Bvh of it tests blocks of 8 with the watertight
 /// test, and a TriangleBatch can hold it.
-template <class Shape> struct is_triangle_kind : std::false_type {};
-template <class T> struct is_triangle_kind<Triangle<T>> : std::true_type {};
-template <class T> struct is_triangle_kind<TexturedTriangle<T>> : std::true_type {};
+template <class Shape>
+struct is_triangle_kind : std::false_type {};
+template <class T>
+struct is_triangle_kind<Triangle<T>> : std::true_type {};
+template <class T>
+struct is_triangle_kind<TexturedTriangle<T>> : std::true_type {};
 
 /// How a scene finds hits among the objects of one kind ("model no more than a scene needs").
 enum class Acceleration {
@@ -248,7 +260,8 @@ public:
     }
     /// Texture `index` (Material::texture); throws std::out_of_range if it does not exist.
     [[nodiscard]] const Texture<T>& texture(int index) const {
-        if (index < 0 || std::size_t(index) >= textures.size()) detail::throw_missing("texture", index, textures.size());
+        if (index < 0 || std::size_t(index) >= textures.size())
+            detail::throw_missing("texture", index, textures.size());
         return textures[std::size_t(index)];
     }
     /// Checks that every object's and mesh's materials and every material's texture (when ≥ 0)
@@ -285,7 +298,8 @@ public:
     MeshId add_mesh(Mesh<T> mesh, std::uint32_t material_id, const BvhOptions& options = {}) {
         mesh.validate();
         MeshEntry entry;
-        entry.largest_material_id = mesh.material.empty() ? 0 : *std::max_element(mesh.material.begin(), mesh.material.end());
+        entry.largest_material_id =
+            mesh.material.empty() ? 0 : *std::max_element(mesh.material.begin(), mesh.material.end());
         (void)material(material_id + entry.largest_material_id);
         entry.material = material_id;
         entry.mesh = std::make_shared<const Mesh<T>>(std::move(mesh));
@@ -296,7 +310,8 @@ public:
         return id;
     }
     /// Adds a triangle soup as a mesh (three vertices a triangle), as add_mesh(Mesh).
-    MeshId add_mesh(const std::vector<Triangle<T>>& triangles, std::uint32_t material_id, const BvhOptions& options = {}) {
+    MeshId add_mesh(const std::vector<Triangle<T>>& triangles, std::uint32_t material_id,
+                    const BvhOptions& options = {}) {
         return add_mesh(Mesh<T>::from_triangles(triangles), material_id, options);
     }
 
@@ -341,8 +356,8 @@ public:
                 else {
                     BvhOptions small_leaves = options;
                     small_leaves.leaf_size = shape_leaf_size;
-                    accel.objects = std::make_shared<const BvhTree<T>>(
-                        build_bvh<T>(vec.size(), [&vec](std::size_t i) { return bounds(vec[i].shape); }, small_leaves));
+                    accel.objects = std::make_shared<const BvhTree<T>>(build_bvh<T>(
+                        vec.size(), [&vec](std::size_t i) { return bounds(vec[i].shape); }, small_leaves));
                 }
             } else if constexpr (is_triangle_kind<Shape>::value) {
                 if (uses(Acceleration::batch, kind, vec.size())) {
@@ -357,8 +372,8 @@ public:
         if (instances_.size() > 1) {
             BvhOptions one_per_leaf = options; // each placement's own box is tested before its mesh is entered
             one_per_leaf.leaf_size = 1;
-            top_ = std::make_shared<const BvhTree<T>>(
-                build_bvh<T>(instances_.size(), [this](std::size_t i) { return instances_[i].box; }, one_per_leaf));
+            top_ = std::make_shared<const BvhTree<T>>(build_bvh<T>(
+                instances_.size(), [this](std::size_t i) { return instances_[i].box; }, one_per_leaf));
         }
     }
 
@@ -400,8 +415,9 @@ public:
         std::size_t bytes = instances_.capacity() * sizeof(Instance) + (top_ ? tree_memory(*top_) : 0);
         for (const MeshEntry& m : meshes_)
             bytes += m.bvh->memory() + m.mesh->positions.capacity() * sizeof(Vertex<T>) +
-                     m.mesh->indices.capacity() * sizeof(m.mesh->indices[0]) + m.mesh->normals.capacity() * sizeof(Vertex<T>) +
-                     m.mesh->uvs.capacity() * sizeof(m.mesh->uvs[0]) + m.mesh->material.capacity() * sizeof(std::uint32_t);
+                     m.mesh->indices.capacity() * sizeof(m.mesh->indices[0]) +
+                     m.mesh->normals.capacity() * sizeof(Vertex<T>) + m.mesh->uvs.capacity() * sizeof(m.mesh->uvs[0]) +
+                     m.mesh->material.capacity() * sizeof(std::uint32_t);
         for_each_kind([&](auto kind, const auto& vec) {
             const auto& accel = std::get<kind>(accel_);
             bytes += vec.capacity() * sizeof(vec[0]);
@@ -428,7 +444,8 @@ public:
         };
         for_each_kind([&](auto kind, const auto& vec) {
             using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
-            const std::uint8_t* mask = culled && !culled->objects[kind].empty() ? culled->objects[kind].data() : nullptr;
+            const std::uint8_t* mask =
+                culled && !culled->objects[kind].empty() ? culled->objects[kind].data() : nullptr;
             const auto& accel = std::get<kind>(accel_);
             if constexpr (is_triangle_kind<Shape>::value) {
                 if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) {
@@ -436,7 +453,8 @@ public:
                     filter.skip = mask;
                     return take(accel.triangles->intersect(ray, t, filter), kind);
                 }
-                if (accel.batch && !mask && uses(Acceleration::batch, kind, vec.size())) return take(accel.batch->nearest(ray, t), kind);
+                if (accel.batch && !mask && uses(Acceleration::batch, kind, vec.size()))
+                    return take(accel.batch->nearest(ray, t), kind);
             } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
                 return nearest_in_tree(*accel.objects, vec, kind, ray, mask, t, best);
             }
@@ -467,7 +485,8 @@ public:
             const auto& accel = std::get<kind>(accel_);
             if constexpr (is_triangle_kind<Shape>::value) {
                 if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) {
-                    accel.triangles->for_each_hit(ray, t_max, [&](std::uint32_t i, const Hit<T>&) { return pass(vec[i].material); });
+                    accel.triangles->for_each_hit(
+                        ray, t_max, [&](std::uint32_t i, const Hit<T>&) { return pass(vec[i].material); });
                     return;
                 }
                 if (accel.batch && uses(Acceleration::batch, kind, vec.size())) {
@@ -539,7 +558,7 @@ private:
     // (which it lowers), into `best`.
     template <class Objects>
     void nearest_in_tree(const BvhTree<T>& tree, const Objects& vec, std::size_t kind, const Ray<T>& ray,
-                                              const std::uint8_t* mask, T& t, Hit<T>& best) const {
+                         const std::uint8_t* mask, T& t, Hit<T>& best) const {
         traverse<Visit::nearest>(tree, ray, t, [&](std::uint32_t leaf, T&) {
             const auto& l = tree.leaves()[leaf];
             for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
@@ -641,15 +660,17 @@ private:
         return w;
     }
     [[nodiscard]] static std::size_t tree_memory(const BvhTree<T>& tree) noexcept {
-        return tree.node_count() * sizeof(typename BvhTree<T>::Node) + tree.leaf_count() * sizeof(typename BvhTree<T>::Leaf) +
-               tree.size() * sizeof(std::uint32_t);
+        return tree.node_count() * sizeof(typename BvhTree<T>::Node) +
+               tree.leaf_count() * sizeof(typename BvhTree<T>::Leaf) + tree.size() * sizeof(std::uint32_t);
     }
 
     template <class Shape, std::size_t I = 0>
     static constexpr std::size_t index_of() {
         static_assert(I < kinds, "isin::Scene::add: this scene does not hold that primitive kind");
-        if constexpr (std::is_same_v<Shape, std::tuple_element_t<I, std::tuple<Shapes<T>...>>>) return I;
-        else return index_of<Shape, I + 1>();
+        if constexpr (std::is_same_v<Shape, std::tuple_element_t<I, std::tuple<Shapes<T>...>>>)
+            return I;
+        else
+            return index_of<Shape, I + 1>();
     }
 
     template <class F, std::size_t... I>

@@ -36,24 +36,23 @@ struct PointLight {
 /// Diffuse coefficient (§7): N·L for unit N and L (L from the point to the light); negative → 0.
 template <class T>
 [[nodiscard]] constexpr T diffuse_coefficient(const Vertex<T>& N, const Vertex<T>& L) noexcept {
-    const T c = dot(N, L); // §7: cos of the angle between N and L
+    const T c = dot(N, L);      // §7: cos of the angle between N and L
     return c > T(0) ? c : T(0); // §7: facing away from the light → unlit
 }
 
 /// Diffuse colour (§7): coefficient × object colour.
 template <class T>
-[[nodiscard]] constexpr Color<T> diffuse(const Vertex<T>& N, const Vertex<T>& L,
-                                         const Color<T>& object) noexcept {
+[[nodiscard]] constexpr Color<T> diffuse(const Vertex<T>& N, const Vertex<T>& L, const Color<T>& object) noexcept {
     return diffuse_coefficient(N, L) * object; // §7: N·L × colour
 }
 
 /// Specular coefficient (§7): reflect the light-to-surface direction −L about N
 /// (Rf = d − 2(d·N)N), take its cosine with V (unit, towards the eye), raise it to `shininess`.
 template <class T>
-[[nodiscard]] inline T specular_coefficient(const Vertex<T>& N, const Vertex<T>& L,
-                                            const Vertex<T>& V, T shininess) noexcept {
-    const Vertex<T> Rf = reflect(-L, N);       // §7: Rf = d − 2(d·N)N with d = −L
-    const T c = dot(Rf, V);                     // §7: cos(Rf, V)
+[[nodiscard]] inline T specular_coefficient(const Vertex<T>& N, const Vertex<T>& L, const Vertex<T>& V,
+                                            T shininess) noexcept {
+    const Vertex<T> Rf = reflect(-L, N);             // §7: Rf = d − 2(d·N)N with d = −L
+    const T c = dot(Rf, V);                          // §7: cos(Rf, V)
     return c > T(0) ? std::pow(c, shininess) : T(0); // §7: cos^shininess
 }
 
@@ -66,23 +65,21 @@ template <class T>
 /// One light's Phong contribution (§7) at a point with unit normal N, unit L towards the light
 /// and unit V towards the eye: kd·diffuse + ks·specular, both tinted by the light's colour.
 template <class T>
-[[nodiscard]] inline Color<T> phong_light(const Material<T>& m, const Color<T>& object,
-                                          const Vertex<T>& N, const Vertex<T>& L,
-                                          const Vertex<T>& V, const Color<T>& light) noexcept {
+[[nodiscard]] inline Color<T> phong_light(const Material<T>& m, const Color<T>& object, const Vertex<T>& N,
+                                          const Vertex<T>& L, const Vertex<T>& V, const Color<T>& light) noexcept {
     const T NdotL = diffuse_coefficient(N, L);
     if (NdotL <= T(0)) return {T(0), T(0), T(0)};
-    return (m.kd * NdotL * object + m.ks * specular_coefficient(N, L, V, m.shininess) *
-                                        Color<T>{T(1), T(1), T(1)}) * light; // §7: kd·diffuse + ks·specular
+    return (m.kd * NdotL * object + m.ks * specular_coefficient(N, L, V, m.shininess) * Color<T>{T(1), T(1), T(1)}) *
+           light; // §7: kd·diffuse + ks·specular
 }
 
 /// Refracted direction by Snell's law (§8), n1 sin θ1 = n2 sin θ2, for a unit direction d and a
 /// unit normal n facing against d (d·n ≤ 0); eta = n1 / n2. Empty on total internal reflection.
 template <class T>
-[[nodiscard]] inline std::optional<Vertex<T>> refract(const Vertex<T>& d, const Vertex<T>& n,
-                                                      T eta) noexcept {
+[[nodiscard]] inline std::optional<Vertex<T>> refract(const Vertex<T>& d, const Vertex<T>& n, T eta) noexcept {
     const T cos_i = -dot(d, n);
-    const T sin2_t = eta * eta * (T(1) - cos_i * cos_i);  // §8: sin²θ2 = (n1/n2)² sin²θ1
-    if (!(sin2_t <= T(1))) return std::nullopt;           // §8: total internal reflection (or NaN)
+    const T sin2_t = eta * eta * (T(1) - cos_i * cos_i); // §8: sin²θ2 = (n1/n2)² sin²θ1
+    if (!(sin2_t <= T(1))) return std::nullopt;          // §8: total internal reflection (or NaN)
     const T cos_t = std::sqrt(T(1) - sin2_t);
     return eta * d + (eta * cos_i - cos_t) * n;
 }

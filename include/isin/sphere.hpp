@@ -52,25 +52,25 @@ template <class T>
     const T a = dot(Rd, Rd);
     if (!(a > T(0)) || !(a < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
     if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
-    const T inv_a = T(1) / a;                            // 1 for the note's unit Rd
-    const Vertex<T> l = sp.center - ray.origin;          // §6: l = C − Ro
-    const T s = dot(l, Rd) * inv_a;                      // §6: s = l·Rd (closest approach)
-    const T l2 = dot(l, l);                              // §6: l2 = l·l
-    const T r2 = sp.radius * sp.radius;                  // §6: r2 = r²
-    if (s < T(0) && l2 > r2) return Hit<T>::miss();      // §6: behind an outside (or leaving) origin
+    const T inv_a = T(1) / a;                       // 1 for the note's unit Rd
+    const Vertex<T> l = sp.center - ray.origin;     // §6: l = C − Ro
+    const T s = dot(l, Rd) * inv_a;                 // §6: s = l·Rd (closest approach)
+    const T l2 = dot(l, l);                         // §6: l2 = l·l
+    const T r2 = sp.radius * sp.radius;             // §6: r2 = r²
+    if (s < T(0) && l2 > r2) return Hit<T>::miss(); // §6: behind an outside (or leaving) origin
     const Vertex<T> m = l - s * Rd;
-    const T m2 = dot(m, m);                              // §6: m2 = l2 − s², as |l − s·Rd|² (RTG 7)
-    if (!(m2 <= r2)) return Hit<T>::miss();              // §6: m2 > r2 → passes aside; NaN → miss
-    const T q = std::sqrt((r2 - m2) * inv_a);            // §6: q = √(r2 − m2)
-    const T c = (l2 - r2) * inv_a;                       // t_near · t_far
+    const T m2 = dot(m, m);                   // §6: m2 = l2 − s², as |l − s·Rd|² (RTG 7)
+    if (!(m2 <= r2)) return Hit<T>::miss();   // §6: m2 > r2 → passes aside; NaN → miss
+    const T q = std::sqrt((r2 - m2) * inv_a); // §6: q = √(r2 − m2)
+    const T c = (l2 - r2) * inv_a;            // t_near · t_far
     T t;
     if (std::fabs(l2 - r2) <= surface_band(sp, ray.origin)) { // §8 fix, scale-relative: on the surface
-        if (!(s > T(0))) return Hit<T>::miss();          // leaving the sphere: no self-hit
-        t = s + q;                                       // entering: the far side
-    } else if (l2 > r2) {                                // §6: origin outside (s ≥ 0 here)
-        t = c / (s + q);                                 // §6: t = s − q, without cancellation
+        if (!(s > T(0))) return Hit<T>::miss();               // leaving the sphere: no self-hit
+        t = s + q;                                            // entering: the far side
+    } else if (l2 > r2) {                                     // §6: origin outside (s ≥ 0 here)
+        t = c / (s + q);                                      // §6: t = s − q, without cancellation
     } else {
-        t = s >= T(0) ? s + q : c / (s - q);             // §6: origin inside → t = s + q
+        t = s >= T(0) ? s + q : c / (s - q); // §6: origin inside → t = s + q
     }
     return t > T(0) && t < std::numeric_limits<T>::infinity() ? Hit<T>::at(t) : Hit<T>::miss();
 }
@@ -80,19 +80,18 @@ template <class T>
 /// m2 = l2 − s². Needs a unit direction. A ray restarted on the surface may hit it again at t ≈ 0.
 /// Only the guards that keep bad input defined (zero direction or radius, NaN) are added.
 template <class T>
-[[nodiscard]] inline Hit<T> intersect_note(const Ray<T>& ray, const Sphere<T>& sp,
-                                           T outside_margin = T(0)) noexcept {
+[[nodiscard]] inline Hit<T> intersect_note(const Ray<T>& ray, const Sphere<T>& sp, T outside_margin = T(0)) noexcept {
     if (!(dot(ray.direction, ray.direction) > T(0)) || !(sp.radius > T(0))) return Hit<T>::miss();
-    const Vertex<T> l = sp.center - ray.origin;          // §6: l = C − Ro
-    const T s = dot(l, ray.direction);                   // §6: s = l·Rd
-    const T l2 = dot(l, l);                              // §6: l2 = l·l
-    const T r2 = sp.radius * sp.radius;                  // §6: r2 = r²
-    const bool outside = l2 > r2 + outside_margin;       // §8: l2 > r2 (+ 0.001)
-    if (s < T(0) && outside) return Hit<T>::miss();      // §6: behind
-    const T m2 = l2 - s * s;                             // §6: m2 = l2 − s²
-    if (!(m2 <= r2)) return Hit<T>::miss();              // §6: m2 > r2 → miss
-    const T q = std::sqrt(r2 - m2);                      // §6: q = √(r2 − m2)
-    const T t = outside ? s - q : s + q;                 // §6: outside → s − q, inside → s + q
+    const Vertex<T> l = sp.center - ray.origin;     // §6: l = C − Ro
+    const T s = dot(l, ray.direction);              // §6: s = l·Rd
+    const T l2 = dot(l, l);                         // §6: l2 = l·l
+    const T r2 = sp.radius * sp.radius;             // §6: r2 = r²
+    const bool outside = l2 > r2 + outside_margin;  // §8: l2 > r2 (+ 0.001)
+    if (s < T(0) && outside) return Hit<T>::miss(); // §6: behind
+    const T m2 = l2 - s * s;                        // §6: m2 = l2 − s²
+    if (!(m2 <= r2)) return Hit<T>::miss();         // §6: m2 > r2 → miss
+    const T q = std::sqrt(r2 - m2);                 // §6: q = √(r2 − m2)
+    const T t = outside ? s - q : s + q;            // §6: outside → s − q, inside → s + q
     return t > T(0) && t < std::numeric_limits<T>::infinity() ? Hit<T>::at(t) : Hit<T>::miss();
 }
 
@@ -105,7 +104,7 @@ template <class T>
     const T a = dot(ray.direction, ray.direction);
     const T b = T(2) * dot(oc, ray.direction);
     const T c = dot(oc, oc) - sp.radius * sp.radius;
-    const T disc = b * b - T(4) * a * c;                 // discriminant
+    const T disc = b * b - T(4) * a * c; // discriminant
     if (!(disc >= T(0)) || !(a > T(0))) return Hit<T>::miss();
     const T root = std::sqrt(disc);
     const T t0 = (-b - root) / (T(2) * a), t1 = (-b + root) / (T(2) * a);
@@ -122,14 +121,14 @@ template <class T>
     const Vertex<T> f = ray.origin - sp.center;
     const T a = dot(ray.direction, ray.direction);
     if (!(a > T(0))) return Hit<T>::miss();
-    const T b = -dot(f, ray.direction);                  // RTG: b′ = −f·d
-    const Vertex<T> g = f + (b / a) * ray.direction;     // RTG: f − (f·d/a)·d
+    const T b = -dot(f, ray.direction);              // RTG: b′ = −f·d
+    const Vertex<T> g = f + (b / a) * ray.direction; // RTG: f − (f·d/a)·d
     const T r2 = sp.radius * sp.radius;
-    const T delta = r2 - dot(g, g);                      // RTG: Δ/(4a) = r² − |g|²
+    const T delta = r2 - dot(g, g); // RTG: Δ/(4a) = r² − |g|²
     if (!(delta >= T(0))) return Hit<T>::miss();
     const T c = dot(f, f) - r2;
     const T q = b + std::copysign(std::sqrt(a * delta), b);
-    const T ta = c / q, tb = q / a;                      // RTG: t0 = c/q, t1 = q/a
+    const T ta = c / q, tb = q / a; // RTG: t0 = c/q, t1 = q/a
     const T t_near = ta < tb ? ta : tb, t_far = ta < tb ? tb : ta;
     const T t = t_near > T(0) ? t_near : t_far;
     return t > T(0) && t < std::numeric_limits<T>::infinity() ? Hit<T>::at(t) : Hit<T>::miss();

@@ -28,7 +28,7 @@ template <class T>
 [[nodiscard]] constexpr std::array<T, 2> note_texel(T u, T v, T w, T h, bool second_triangle) noexcept {
     static_assert(std::is_floating_point_v<T>, "isin::note_texel needs a floating-point type");
     if (second_triangle) return {(T(1) - u) * w, (T(1) - v) * h}; // §10: ((1−u)·w, (1−v)·h)
-    return {u * w, v * h};                                         // §10: (u·w, v·h)
+    return {u * w, v * h};                                        // §10: (u·w, v·h)
 }
 
 /// How a texture is read between texel centres.
@@ -55,8 +55,7 @@ template <class T>
 
 /// Samples a w × h texel grid given by `texel(x, y)` at normalised (s, t); see the top comment.
 template <class T, class Texel>
-[[nodiscard]] inline Color<T> filter_texels(int w, int h, T s, T t, Filter filter,
-                                            const Texel& texel) noexcept {
+[[nodiscard]] inline Color<T> filter_texels(int w, int h, T s, T t, Filter filter, const Texel& texel) noexcept {
     if (!std::isfinite(s) || !std::isfinite(t)) return texel(0, 0);
     s = wrap_unit(s);
     t = wrap_unit(t);
@@ -91,14 +90,11 @@ struct Checkerboard {
     [[nodiscard]] T height() const noexcept { return T(rows()); }
 
     /// Colour of square (i, j), i across, j down from the top: a when i + j is even, else b.
-    [[nodiscard]] Color<T> square(int i, int j) const noexcept {
-        return parity(i, j) == 0 ? a : b;
-    }
+    [[nodiscard]] Color<T> square(int i, int j) const noexcept { return parity(i, j) == 0 ? a : b; }
 
     /// The colour at normalised (s, t), repeating.
     [[nodiscard]] Color<T> sample(T s, T t, Filter filter) const noexcept {
-        return detail::filter_texels(columns(), rows(), s, t, filter,
-                                     [this](int i, int j) { return square(i, j); });
+        return detail::filter_texels(columns(), rows(), s, t, filter, [this](int i, int j) { return square(i, j); });
     }
 
 private:
@@ -116,8 +112,7 @@ class ImageTexture {
 
 public:
     /// Copies and converts `image`.
-    explicit ImageTexture(const Image& image)
-        : width_(image.width()), height_(image.height()) {
+    explicit ImageTexture(const Image& image) : width_(image.width()), height_(image.height()) {
         texels_.reserve(image.pixels().size());
         for (const Rgb8& p : image.pixels()) texels_.push_back(from_rgb8<T>(p.r, p.g, p.b));
     }
@@ -137,8 +132,7 @@ public:
 
     /// The colour at normalised (s, t), repeating; t = 0 is the top row.
     [[nodiscard]] Color<T> sample(T s, T t, Filter filter) const noexcept {
-        return detail::filter_texels(width_, height_, s, t, filter,
-                                     [this](int x, int y) { return texel(x, y); });
+        return detail::filter_texels(width_, height_, s, t, filter, [this](int x, int y) { return texel(x, y); });
     }
 
 private:

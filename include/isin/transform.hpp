@@ -18,7 +18,7 @@ template <class T>
 struct Transform {
     static_assert(std::is_floating_point_v<T>, "isin::Transform needs a floating-point type");
     T m[3][3] = {{T(1), T(0), T(0)}, {T(0), T(1), T(0)}, {T(0), T(0), T(1)}}; ///< M, row by row
-    Vertex<T> d{T(0), T(0), T(0)};                                          ///< the translation
+    Vertex<T> d{T(0), T(0), T(0)};                                            ///< the translation
 
     /// The identity.
     [[nodiscard]] static constexpr Transform identity() noexcept { return {}; }
@@ -59,7 +59,8 @@ struct Transform {
     [[nodiscard]] constexpr Transform operator*(const Transform& inner) const noexcept {
         Transform t;
         for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) t.m[i][j] = m[i][0] * inner.m[0][j] + m[i][1] * inner.m[1][j] + m[i][2] * inner.m[2][j];
+            for (int j = 0; j < 3; ++j)
+                t.m[i][j] = m[i][0] * inner.m[0][j] + m[i][1] * inner.m[1][j] + m[i][2] * inner.m[2][j];
         t.d = point(inner.d);
         return t;
     }

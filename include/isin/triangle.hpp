@@ -39,7 +39,7 @@ template <class T>
 [[nodiscard]] constexpr T ray_plane_t(const Ray<T>& ray, const Vertex<T>& N, T D) noexcept {
     const T NdotRd = dot(N, ray.direction);
     if (NdotRd == T(0)) return std::numeric_limits<T>::quiet_NaN(); // §4: N·Rd = 0 → parallel
-    return -(dot(N, ray.origin) + D) / NdotRd; // §4: t = −(N·Ro + D) / (N·Rd)
+    return -(dot(N, ray.origin) + D) / NdotRd;                      // §4: t = −(N·Ro + D) / (N·Rd)
 }
 
 /// The four parallelogram areas of the §4 area test for a point R on the triangle's plane.
@@ -50,13 +50,12 @@ struct AreaTerms {
 
 /// e1 = V1−V0, e2 = V2−V0 and N = e1 × e2 are passed in because the callers already have them.
 template <class T>
-[[nodiscard]] inline AreaTerms<T> area_terms(const Triangle<T>& tri, const Vertex<T>& e1,
-                                             const Vertex<T>& e2, const Vertex<T>& N,
-                                             const Vertex<T>& R) noexcept {
-    return {length(N),                                  // §4: S  = |(V1−V0)×(V2−V0)|
-            length(cross(R - tri.v0, e2)),              // §4: s1 = |(R−V0)×(V2−V0)|
-            length(cross(e1, R - tri.v0)),              // §4: s2 = |(V1−V0)×(R−V0)|
-            length(cross(tri.v1 - R, tri.v2 - R))};     // §4: s3 = |(V1−R)×(V2−R)|
+[[nodiscard]] inline AreaTerms<T> area_terms(const Triangle<T>& tri, const Vertex<T>& e1, const Vertex<T>& e2,
+                                             const Vertex<T>& N, const Vertex<T>& R) noexcept {
+    return {length(N),                              // §4: S  = |(V1−V0)×(V2−V0)|
+            length(cross(R - tri.v0, e2)),          // §4: s1 = |(R−V0)×(V2−V0)|
+            length(cross(e1, R - tri.v0)),          // §4: s2 = |(V1−V0)×(R−V0)|
+            length(cross(tri.v1 - R, tri.v2 - R))}; // §4: s3 = |(V1−R)×(V2−R)|
 }
 
 /// The §4 areas for a point R, from the triangle alone.
@@ -70,8 +69,7 @@ namespace detail {
 /// True when the edges e1, e2 span no area: |e1 × e2| lies within the rounding noise of the cross
 /// product (sin of the angle between the edges below ~8ε). Scale-free, overflow-free in max norm.
 template <class T>
-[[nodiscard]] inline bool is_degenerate(const Vertex<T>& e1, const Vertex<T>& e2,
-                                        const Vertex<T>& N) noexcept {
+[[nodiscard]] inline bool is_degenerate(const Vertex<T>& e1, const Vertex<T>& e2, const Vertex<T>& N) noexcept {
     constexpr T eps = std::numeric_limits<T>::epsilon();
     return !(max_abs(N) > T(8) * eps * max_abs(e1) * max_abs(e2)); // NaN → degenerate
 }
@@ -82,12 +80,12 @@ template <class T, class Tolerance>
                                                 Tolerance tolerance) noexcept {
     const Vertex<T> e1 = tri.v1 - tri.v0;
     const Vertex<T> e2 = tri.v2 - tri.v0;
-    const Vertex<T> N = cross(e1, e2);                    // §4: (A,B,C) = N
+    const Vertex<T> N = cross(e1, e2); // §4: (A,B,C) = N
     if (detail::is_degenerate(e1, e2, N)) return Hit<T>::miss();
     const T D = isin::plane_offset(N, tri.v0);
     const T t = isin::ray_plane_t(ray, N, D);
     if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss(); // §4: t ≤ 0 → behind
-    const Vertex<T> R = ray.at(t);                        // §3: R = Ro + t·Rd
+    const Vertex<T> R = ray.at(t);                                                       // §3: R = Ro + t·Rd
     const AreaTerms<T> a = isin::area_terms(tri, e1, e2, N, R);
     if (!(std::fabs(a.S - (a.s1 + a.s2 + a.s3)) <= tolerance(a.S, R, e1, e2, ray))) // §4: |S − Σs| ≤ ε
         return Hit<T>::miss();
@@ -100,10 +98,10 @@ template <class T, class Tolerance>
 /// |S − (s1+s2+s3)| ≤ epsilon (the note uses 0.005, in squared length units). Being absolute,
 /// it accepts whole neighbourhoods of tiny triangles and rejects hits on huge or far-away ones.
 template <class T>
-[[nodiscard]] inline Hit<T> intersect_area(const Ray<T>& ray, const Triangle<T>& tri,
-                                           T epsilon) noexcept {
-    return detail::intersect_area_with(ray, tri, [epsilon](T, const Vertex<T>&, const Vertex<T>&,
-                                                           const Vertex<T>&, const Ray<T>&) { return epsilon; });
+[[nodiscard]] inline Hit<T> intersect_area(const Ray<T>& ray, const Triangle<T>& tri, T epsilon) noexcept {
+    return detail::intersect_area_with(
+        ray, tri,
+        [epsilon](T, const Vertex<T>&, const Vertex<T>&, const Vertex<T>&, const Ray<T>&) { return epsilon; });
 }
 
 /// Area test of note §4, isin's default: the same formulas, two departures for accuracy.
@@ -117,8 +115,7 @@ template <class T>
     const Ray<T> local{ray.origin - tri.v0, ray.direction};
     const Triangle<T> local_tri{{T(0), T(0), T(0)}, tri.v1 - tri.v0, tri.v2 - tri.v0};
     return detail::intersect_area_with(
-        local, local_tri,
-        [](T S, const Vertex<T>& R, const Vertex<T>& e1, const Vertex<T>& e2, const Ray<T>& r) {
+        local, local_tri, [](T S, const Vertex<T>& R, const Vertex<T>& e1, const Vertex<T>& e2, const Ray<T>& r) {
             constexpr T eps = std::numeric_limits<T>::epsilon();
             const T L = max_of(max_abs(e1), max_abs(e2));
             const T M = max_of(max_abs(R), max_abs(r.origin));
@@ -135,19 +132,19 @@ template <class T>
                                                       bool cull_backfaces = false) noexcept {
     const Vertex<T> e1 = tri.v1 - tri.v0;
     const Vertex<T> e2 = tri.v2 - tri.v0;
-    const Vertex<T> p = cross(ray.direction, e2);      // MT: P = Rd × E2
-    const T det = dot(e1, p);                          // MT: det = E1·P = −N·Rd
+    const Vertex<T> p = cross(ray.direction, e2);                               // MT: P = Rd × E2
+    const T det = dot(e1, p);                                                   // MT: det = E1·P = −N·Rd
     if (cull_backfaces ? !(det > T(0)) : !(det != T(0))) return Hit<T>::miss(); // §11: det ≤ 0 → backface
     // u, v, t are compared scaled by |det|; the division waits for the hit path.
     const T sign = det < T(0) ? T(-1) : T(1);
     const T abs_det = det * sign;
-    const Vertex<T> s = ray.origin - tri.v0;           // MT: S = Ro − V0
-    const T U = dot(s, p) * sign;                      // MT: u = S·P / det
+    const Vertex<T> s = ray.origin - tri.v0; // MT: S = Ro − V0
+    const T U = dot(s, p) * sign;            // MT: u = S·P / det
     if (!(U >= T(0) && U <= abs_det)) return Hit<T>::miss();
-    const Vertex<T> q = cross(s, e1);                  // MT: Q = S × E1
-    const T V = dot(ray.direction, q) * sign;          // MT: v = Rd·Q / det
+    const Vertex<T> q = cross(s, e1);         // MT: Q = S × E1
+    const T V = dot(ray.direction, q) * sign; // MT: v = Rd·Q / det
     if (!(V >= T(0) && U + V <= abs_det)) return Hit<T>::miss();
-    const T tt = dot(e2, q) * sign;                    // MT: t = E2·Q / det
+    const T tt = dot(e2, q) * sign; // MT: t = E2·Q / det
     if (!(tt > T(0))) return Hit<T>::miss();
     const T inv_det = T(1) / abs_det;
     const T t = tt * inv_det;
@@ -201,7 +198,7 @@ template <class T>
     const T det = U + V + W;
     if (!(det != T(0))) return Hit<T>::miss();
     const T Az = s.Sz * component(A, kz), Bz = s.Sz * component(B, kz), Cz = s.Sz * component(C, kz);
-    const T t_scaled = U * Az + V * Bz + W * Cz;        // WBW: t·det
+    const T t_scaled = U * Az + V * Bz + W * Cz; // WBW: t·det
     const T inv_det = T(1) / det;
     const T t = t_scaled * inv_det;
     if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
@@ -222,8 +219,8 @@ template <class T>
     detail::WatertightShear<T> shear;
     if (!shear.set(ray.direction)) return Hit<T>::miss();
     // Per triangle: vertices relative to the origin, sheared onto the ray's frame.
-    const Hit<T> h = detail::intersect_sheared(tri.v0 - ray.origin, tri.v1 - ray.origin, tri.v2 - ray.origin, shear,
-                                               cull_backfaces);
+    const Hit<T> h =
+        detail::intersect_sheared(tri.v0 - ray.origin, tri.v1 - ray.origin, tri.v2 - ray.origin, shear, cull_backfaces);
     if (!h) return h;
     const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
     if (detail::is_degenerate(e1, e2, cross(e1, e2))) return Hit<T>::miss(); // hit path only

@@ -11,24 +11,71 @@ struct Vertex {
     static_assert(std::is_floating_point_v<T>, "isin::Vertex needs float, double or long double");
     T x, y, z;
 
-    constexpr Vertex& operator+=(const Vertex& b) noexcept { x += b.x; y += b.y; z += b.z; return *this; }
-    constexpr Vertex& operator-=(const Vertex& b) noexcept { x -= b.x; y -= b.y; z -= b.z; return *this; }
-    constexpr Vertex& operator*=(T s) noexcept { x *= s; y *= s; z *= s; return *this; }
-    constexpr Vertex& operator/=(T s) noexcept { x /= s; y /= s; z /= s; return *this; }
+    constexpr Vertex& operator+=(const Vertex& b) noexcept {
+        x += b.x;
+        y += b.y;
+        z += b.z;
+        return *this;
+    }
+    constexpr Vertex& operator-=(const Vertex& b) noexcept {
+        x -= b.x;
+        y -= b.y;
+        z -= b.z;
+        return *this;
+    }
+    constexpr Vertex& operator*=(T s) noexcept {
+        x *= s;
+        y *= s;
+        z *= s;
+        return *this;
+    }
+    constexpr Vertex& operator/=(T s) noexcept {
+        x /= s;
+        y /= s;
+        z /= s;
+        return *this;
+    }
 };
 
 using Vec3f = Vertex<float>;
 using Vec3d = Vertex<double>;
 
-template <class T> constexpr Vertex<T> operator+(const Vertex<T>& a, const Vertex<T>& b) noexcept { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-template <class T> constexpr Vertex<T> operator-(const Vertex<T>& a, const Vertex<T>& b) noexcept { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-template <class T> constexpr Vertex<T> operator-(const Vertex<T>& a) noexcept { return {-a.x, -a.y, -a.z}; }
-template <class T> constexpr Vertex<T> operator+(const Vertex<T>& a) noexcept { return a; }
-template <class T> constexpr Vertex<T> operator*(const Vertex<T>& a, T s) noexcept { return {a.x * s, a.y * s, a.z * s}; }
-template <class T> constexpr Vertex<T> operator*(T s, const Vertex<T>& a) noexcept { return {s * a.x, s * a.y, s * a.z}; }
-template <class T> constexpr Vertex<T> operator/(const Vertex<T>& a, T s) noexcept { return {a.x / s, a.y / s, a.z / s}; }
-template <class T> constexpr bool operator==(const Vertex<T>& a, const Vertex<T>& b) noexcept { return a.x == b.x && a.y == b.y && a.z == b.z; }
-template <class T> constexpr bool operator!=(const Vertex<T>& a, const Vertex<T>& b) noexcept { return !(a == b); }
+template <class T>
+constexpr Vertex<T> operator+(const Vertex<T>& a, const Vertex<T>& b) noexcept {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+template <class T>
+constexpr Vertex<T> operator-(const Vertex<T>& a, const Vertex<T>& b) noexcept {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+template <class T>
+constexpr Vertex<T> operator-(const Vertex<T>& a) noexcept {
+    return {-a.x, -a.y, -a.z};
+}
+template <class T>
+constexpr Vertex<T> operator+(const Vertex<T>& a) noexcept {
+    return a;
+}
+template <class T>
+constexpr Vertex<T> operator*(const Vertex<T>& a, T s) noexcept {
+    return {a.x * s, a.y * s, a.z * s};
+}
+template <class T>
+constexpr Vertex<T> operator*(T s, const Vertex<T>& a) noexcept {
+    return {s * a.x, s * a.y, s * a.z};
+}
+template <class T>
+constexpr Vertex<T> operator/(const Vertex<T>& a, T s) noexcept {
+    return {a.x / s, a.y / s, a.z / s};
+}
+template <class T>
+constexpr bool operator==(const Vertex<T>& a, const Vertex<T>& b) noexcept {
+    return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+template <class T>
+constexpr bool operator!=(const Vertex<T>& a, const Vertex<T>& b) noexcept {
+    return !(a == b);
+}
 
 /// Dot product (§2): R1·R2 = x1x2 + y1y2 + z1z2 = |R1||R2|cos β.
 template <class T>

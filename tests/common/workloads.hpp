@@ -39,12 +39,12 @@ struct SphereCase {
 
 using Rng = std::mt19937_64;
 
-inline double uniform(Rng& rng, double lo, double hi) {
-    return std::uniform_real_distribution<double>(lo, hi)(rng);
-}
+inline double uniform(Rng& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
 
 template <class T>
-isin::Vertex<T> point(double x, double y, double z) { return {T(x), T(y), T(z)}; }
+isin::Vertex<T> point(double x, double y, double z) {
+    return {T(x), T(y), T(z)};
+}
 
 template <class T>
 isin::Vertex<T> random_unit(Rng& rng) {
@@ -79,9 +79,12 @@ inline void inside_barycentrics(Rng& rng, double margin, double& u, double& v) {
 inline void outside_barycentrics(Rng& rng, double margin, double& u, double& v) {
     const int edge = int(uniform(rng, 0, 3));
     const double s = uniform(rng, 0.1, 0.9);
-    if (edge == 0) u = s, v = -margin;                  // beyond edge V0V1
-    else if (edge == 1) u = -margin, v = s;             // beyond edge V0V2
-    else u = s * (1 + margin), v = (1 - s) * (1 + margin); // beyond edge V1V2
+    if (edge == 0)
+        u = s, v = -margin; // beyond edge V0V1
+    else if (edge == 1)
+        u = -margin, v = s; // beyond edge V0V2
+    else
+        u = s * (1 + margin), v = (1 - s) * (1 + margin); // beyond edge V1V2
 }
 
 // Workload 1, "random": random triangles in [−1,1]³, rays from random origins 2–4 away aimed at
@@ -106,11 +109,11 @@ std::vector<TriangleCase<T>> random_pairs(int n, std::uint64_t seed = 1) {
 template <class T>
 std::vector<isin::Triangle<T>> icosphere(const isin::Vertex<double>& c, double r, int levels) {
     const double p = 1.6180339887498949;
-    std::vector<isin::Vertex<double>> v{{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
-                                        {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
-    const int f[20][3] = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                          {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                          {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+    std::vector<isin::Vertex<double>> v{{-1, p, 0},  {1, p, 0},  {-1, -p, 0}, {1, -p, 0}, {0, -1, p},  {0, 1, p},
+                                        {0, -1, -p}, {0, 1, -p}, {p, 0, -1},  {p, 0, 1},  {-p, 0, -1}, {-p, 0, 1}};
+    const int f[20][3] = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                          {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                          {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
     std::vector<isin::Triangle<double>> tris;
     for (const auto& face : f)
         tris.push_back({isin::normalize(v[size_t(face[0])]), isin::normalize(v[size_t(face[1])]),
@@ -118,7 +121,8 @@ std::vector<isin::Triangle<T>> icosphere(const isin::Vertex<double>& c, double r
     for (int l = 0; l < levels; ++l) {
         std::vector<isin::Triangle<double>> finer;
         for (const auto& t : tris) {
-            const auto a = isin::normalize(t.v0 + t.v1), b = isin::normalize(t.v1 + t.v2), d = isin::normalize(t.v2 + t.v0);
+            const auto a = isin::normalize(t.v0 + t.v1), b = isin::normalize(t.v1 + t.v2),
+                       d = isin::normalize(t.v2 + t.v0);
             finer.insert(finer.end(), {{t.v0, a, d}, {a, t.v1, b}, {d, b, t.v2}, {a, b, d}});
         }
         tris.swap(finer);
@@ -126,7 +130,10 @@ std::vector<isin::Triangle<T>> icosphere(const isin::Vertex<double>& c, double r
     std::vector<isin::Triangle<T>> out;
     for (auto& t : tris) {
         if (isin::dot(isin::normal(t), t.v0) < 0) std::swap(t.v1, t.v2);
-        auto w = [&](const isin::Vertex<double>& q) { const auto s = c + r * q; return point<T>(s.x, s.y, s.z); };
+        auto w = [&](const isin::Vertex<double>& q) {
+            const auto s = c + r * q;
+            return point<T>(s.x, s.y, s.z);
+        };
         out.push_back({w(t.v0), w(t.v1), w(t.v2)});
     }
     return out;
@@ -180,7 +187,8 @@ MeshCase<T> grid_edges(int n, std::uint64_t seed = 3) {
     // Only squares away from the border, so every targeted edge is shared by two triangles.
     std::vector<isin::Triangle<T>> inner;
     for (int j = 1; j < 15; ++j)
-        for (int i = 1; i < 15; ++i) inner.insert(inner.end(), {m.mesh[size_t(2 * (16 * j + i))], m.mesh[size_t(2 * (16 * j + i) + 1)]});
+        for (int i = 1; i < 15; ++i)
+            inner.insert(inner.end(), {m.mesh[size_t(2 * (16 * j + i))], m.mesh[size_t(2 * (16 * j + i) + 1)]});
     m.rays = rays_at_edges(inner, 3.0, n, seed);
     return m;
 }
@@ -197,7 +205,8 @@ std::vector<TriangleCase<T>> grazing(double angle, int n, std::uint64_t seed = 4
         inside_barycentrics(rng, 0.05, u, v);
         const auto target = at_barycentric(tri, u, v);
         const double phi = uniform(rng, 0, 6.283185307179586);
-        const isin::Vertex<double> dir{std::cos(angle) * std::cos(phi), std::sin(angle), std::cos(angle) * std::sin(phi)};
+        const isin::Vertex<double> dir{std::cos(angle) * std::cos(phi), std::sin(angle),
+                                       std::cos(angle) * std::sin(phi)};
         cases.push_back({ray_towards<T>(target + 2.0 * dir, target), tri, Expect::hit});
     }
     return cases;
@@ -211,14 +220,17 @@ std::vector<TriangleCase<T>> scaled(double size, double offset, int n, std::uint
     std::vector<TriangleCase<T>> cases;
     const isin::Vertex<double> o{offset * 0.6, offset * -0.48, offset * 0.64};
     for (int i = 0; i < n; ++i) {
-        const auto a = o + size * isin::Vertex<double>{uniform(rng, -0.1, 0.1), uniform(rng, -0.1, 0.1), uniform(rng, -0.1, 0.1)};
+        const auto a =
+            o + size * isin::Vertex<double>{uniform(rng, -0.1, 0.1), uniform(rng, -0.1, 0.1), uniform(rng, -0.1, 0.1)};
         const auto b = a + size * isin::Vertex<double>{1, uniform(rng, -0.2, 0.2), uniform(rng, -0.2, 0.2)};
         const auto c = a + size * isin::Vertex<double>{uniform(rng, 0.2, 0.6), 1, uniform(rng, -0.2, 0.2)};
         const isin::Triangle<T> tri{point<T>(a.x, a.y, a.z), point<T>(b.x, b.y, b.z), point<T>(c.x, c.y, c.z)};
         const bool in = i % 2 == 0;
         double u, v;
-        if (in) inside_barycentrics(rng, 0.05, u, v);
-        else outside_barycentrics(rng, 0.05, u, v);
+        if (in)
+            inside_barycentrics(rng, 0.05, u, v);
+        else
+            outside_barycentrics(rng, 0.05, u, v);
         const auto target = at_barycentric(tri, u, v);
         auto dir = random_unit<double>(rng);
         const auto N = isin::normalize(isin::cross(b - a, c - a));
@@ -242,8 +254,10 @@ std::vector<TriangleCase<T>> slivers(double aspect, int n, std::uint64_t seed = 
         const isin::Triangle<T> tri{point<T>(a.x, a.y, a.z), point<T>(b.x, b.y, b.z), point<T>(c.x, c.y, c.z)};
         const bool in = i % 2 == 0;
         double u, v;
-        if (in) inside_barycentrics(rng, 0.05, u, v);
-        else outside_barycentrics(rng, 0.05, u, v);
+        if (in)
+            inside_barycentrics(rng, 0.05, u, v);
+        else
+            outside_barycentrics(rng, 0.05, u, v);
         const auto target = at_barycentric(tri, u, v);
         auto dir = isin::normalize(isin::cross(along, across) + 0.5 * random_unit<double>(rng));
         cases.push_back({ray_towards<T>(target + 2.0 * dir, target), tri, in ? Expect::hit : Expect::miss});
@@ -292,7 +306,8 @@ std::vector<isin::Sphere<T>> timing_spheres(std::uint64_t seed = 12) {
     Rng rng(seed);
     std::vector<isin::Sphere<T>> list;
     for (int i = 0; i < 64; ++i)
-        list.push_back({point<T>(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, 4, 6)), T(uniform(rng, 0.2, 0.6))});
+        list.push_back(
+            {point<T>(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, 4, 6)), T(uniform(rng, 0.2, 0.6))});
     return list;
 }
 template <class T>

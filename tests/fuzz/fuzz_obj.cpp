@@ -10,11 +10,9 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     try {
         (void)isin::load_mesh_from_memory<float>(data, size, isin::MeshFormat::obj);
-    } catch (const isin::MeshError&) {
-    }
+    } catch (const isin::MeshError&) {}
     try {
         (void)isin::load_mesh_from_memory<double>(data, size, isin::MeshFormat::obj);
-    } catch (const isin::MeshError&) {
-    }
+    } catch (const isin::MeshError&) {}
     return 0;
 }

@@ -91,13 +91,16 @@ Bytes png(int w, int h, int colour, int depth, bool interlaced) {
 
 Bytes jpeg(int w, int h, int channels, int quality) {
     Bytes pixels(std::size_t(w) * std::size_t(h) * std::size_t(channels));
-    for (std::size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<unsigned char>((i * 7 + (i / 13) * 31) % 256);
+    for (std::size_t i = 0; i < pixels.size(); ++i)
+        pixels[i] = static_cast<unsigned char>((i * 7 + (i / 13) * 31) % 256);
     Bytes out;
-    stbi_write_jpg_to_func([](void* context, void* data, int size) {
-        auto* o = static_cast<Bytes*>(context);
-        const auto* p = static_cast<const unsigned char*>(data);
-        o->insert(o->end(), p, p + size);
-    }, &out, w, h, channels, pixels.data(), quality);
+    stbi_write_jpg_to_func(
+        [](void* context, void* data, int size) {
+            auto* o = static_cast<Bytes*>(context);
+            const auto* p = static_cast<const unsigned char*>(data);
+            o->insert(o->end(), p, p + size);
+        },
+        &out, w, h, channels, pixels.data(), quality);
     return out;
 }
 
@@ -127,7 +130,8 @@ int main(int argc, char** argv) {
         for (int depth : t.depths) {
             if (depth == 0) continue;
             for (bool interlaced : {false, true}) {
-                save(dir / "image" / ("png" + std::to_string(n) + ".png"), png(5 + n % 7, 3 + n % 5, t.colour, depth, interlaced));
+                save(dir / "image" / ("png" + std::to_string(n) + ".png"),
+                     png(5 + n % 7, 3 + n % 5, t.colour, depth, interlaced));
                 ++n;
             }
         }
@@ -153,9 +157,10 @@ int main(int argc, char** argv) {
     for (std::uint32_t i : {0u, 1u, 2u}) put_le(bin, i);
     put_le(bin, std::uint8_t(2)), put_le(bin, 0.5f), put_le(bin, 0.25f);
     save(dir / "ply" / "binary.ply", bin);
-    std::string types_ply = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty char a\nproperty uchar b\n"
-                            "property int16 c\nproperty uint16 d\nproperty int32 e\nproperty uint32 f\nproperty float64 x\n"
-                            "property float32 y\nproperty double z\nelement face 1\nproperty list uint8 int32 vertex_indices\nend_header\n";
+    std::string types_ply =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty char a\nproperty uchar b\n"
+        "property int16 c\nproperty uint16 d\nproperty int32 e\nproperty uint32 f\nproperty float64 x\n"
+        "property float32 y\nproperty double z\nelement face 1\nproperty list uint8 int32 vertex_indices\nend_header\n";
     for (int v = 0; v < 3; ++v) {
         put_le(types_ply, std::int8_t(-1)), put_le(types_ply, std::uint8_t(1)), put_le(types_ply, std::int16_t(-2));
         put_le(types_ply, std::uint16_t(2)), put_le(types_ply, std::int32_t(-3)), put_le(types_ply, std::uint32_t(3));

@@ -24,8 +24,10 @@ namespace isin {
 template <class T>
 struct Box {
     static_assert(std::is_floating_point_v<T>, "isin::Box needs a floating-point type");
-    Vertex<T> lo{std::numeric_limits<T>::infinity(), std::numeric_limits<T>::infinity(), std::numeric_limits<T>::infinity()};
-    Vertex<T> hi{-std::numeric_limits<T>::infinity(), -std::numeric_limits<T>::infinity(), -std::numeric_limits<T>::infinity()};
+    Vertex<T> lo{std::numeric_limits<T>::infinity(), std::numeric_limits<T>::infinity(),
+                 std::numeric_limits<T>::infinity()};
+    Vertex<T> hi{-std::numeric_limits<T>::infinity(), -std::numeric_limits<T>::infinity(),
+                 -std::numeric_limits<T>::infinity()};
 
     /// Grows to take in p.
     void grow(const Vertex<T>& p) noexcept {
@@ -69,12 +71,21 @@ inline int lowest_bit(unsigned mask) noexcept {
 // Eight and four lanes of T as GCC/Clang vectors. Values of these types never cross a function
 // boundary (that would depend on the target's vector ABI); all lane code is written inline.
 #if ISIN_VECTOR_EXTENSIONS
-template <class T> struct Lanes8 { typedef T type __attribute__((vector_size(8 * sizeof(T)))); };
-template <class T> using L8 = typename Lanes8<T>::type;
-template <class T> struct Lanes4 { typedef T type __attribute__((vector_size(4 * sizeof(T)))); };
-template <class T> using L4 = typename Lanes4<T>::type;
+template <class T>
+struct Lanes8 {
+    typedef T type __attribute__((vector_size(8 * sizeof(T))));
+};
+template <class T>
+using L8 = typename Lanes8<T>::type;
+template <class T>
+struct Lanes4 {
+    typedef T type __attribute__((vector_size(4 * sizeof(T))));
+};
+template <class T>
+using L4 = typename Lanes4<T>::type;
 #else
-template <class T> struct L4 {
+template <class T>
+struct L4 {
     T v[4];
     T& operator[](int i) noexcept { return v[i]; }
     const T& operator[](int i) const noexcept { return v[i]; }
@@ -87,7 +98,8 @@ template <class T>
 struct Box4 {
     L4<T> lo, hi;
     Box4() noexcept {
-        for (int a = 0; a < 4; ++a) lo[a] = std::numeric_limits<T>::infinity(), hi[a] = -std::numeric_limits<T>::infinity();
+        for (int a = 0; a < 4; ++a)
+            lo[a] = std::numeric_limits<T>::infinity(), hi[a] = -std::numeric_limits<T>::infinity();
     }
     void grow(const L4<T>& plo, const L4<T>& phi) noexcept {
 #if ISIN_VECTOR_EXTENSIONS
@@ -109,11 +121,21 @@ struct Box4 {
 // resizing a vector that the build then fills in parallel does not first zero it serially.
 template <class T>
 struct UninitAllocator : std::allocator<T> {
-    template <class U> struct rebind { using other = UninitAllocator<U>; };
+    template <class U>
+    struct rebind {
+        using other = UninitAllocator<U>;
+    };
     UninitAllocator() = default;
-    template <class U> UninitAllocator(const UninitAllocator<U>&) noexcept {}
-    template <class U> void construct(U* p) noexcept { ::new (static_cast<void*>(p)) U; }
-    template <class U, class... A> void construct(U* p, A&&... a) { ::new (static_cast<void*>(p)) U(std::forward<A>(a)...); }
+    template <class U>
+    UninitAllocator(const UninitAllocator<U>&) noexcept {}
+    template <class U>
+    void construct(U* p) noexcept {
+        ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... A>
+    void construct(U* p, A&&... a) {
+        ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
+    }
 };
 
 } // namespace detail

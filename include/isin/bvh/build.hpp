@@ -42,7 +42,6 @@ struct BinaryNode {
     [[nodiscard]] bool becomes_leaf() const noexcept { return !left || how[0] == merged; }
 };
 
-
 // Builds one BvhTree; its state (the primitives' boxes and centroids, the binary tree) ends with it.
 template <class T>
 class BvhBuilder {
@@ -85,8 +84,9 @@ public:
             if (skipped) unusable = true;
         });
         if (unusable)
-            prims.erase(std::remove_if(prims.begin(), prims.end(), [](const Prim& p) { return p.index == empty_child; }),
-                        prims.end());
+            prims.erase(
+                std::remove_if(prims.begin(), prims.end(), [](const Prim& p) { return p.index == empty_child; }),
+                prims.end());
         if (prims.empty()) return std::move(tree_);
         leaf_size_ = std::clamp(options.leaf_size, 1, 8);
         std::atomic<int> threads_left{threads - 1};
@@ -148,10 +148,9 @@ private:
     // and centroid bounds, so no level re-reads its primitives for them. Below sah_depth, or when
     // no axis can be binned (all centroids within rounding of each other), it splits at the
     // median of the widest axis, which bounds the depth (and so the traversal stack) for any input.
-    std::unique_ptr<BinaryNode<T>> build_binary(Prims& prims, std::uint32_t first,
-                                                        std::uint32_t count, const Box<T>& box,
-                                                        const Box<T>& centroids, int depth,
-                                                        std::atomic<int>& threads_left) {
+    std::unique_ptr<BinaryNode<T>> build_binary(Prims& prims, std::uint32_t first, std::uint32_t count,
+                                                const Box<T>& box, const Box<T>& centroids, int depth,
+                                                std::atomic<int>& threads_left) {
         auto node = std::make_unique<BinaryNode<T>>();
         node->box = box, node->first = first, node->count = count;
         if (count <= 2 && count <= std::uint32_t(leaf_size_)) return node;
@@ -187,7 +186,8 @@ private:
                 acc.grow(bin[a][b].box.box()), acc_n += bin[a][b].n;
                 if (acc_n == 0 || right_n[b + 1] == 0) continue;
                 const T cost = acc.area() * T(acc_n) + right_area[b + 1] * T(right_n[b + 1]);
-                if (cost < best_cost) best_cost = cost, best_axis = a, best_split = b, best_areas = acc.area() + right_area[b + 1];
+                if (cost < best_cost)
+                    best_cost = cost, best_axis = a, best_split = b, best_areas = acc.area() + right_area[b + 1];
             }
         }
         // Up to leaf_size triangles cost one 8-lane test as a leaf, as each child would: split
@@ -206,9 +206,10 @@ private:
                 Box<T>& side_c = b <= best_split ? left_centroids : right_centroids;
                 if (bin[a][b].n) side.grow(bin[a][b].box.box()), side_c.grow(bin[a][b].centroids.box());
             }
-            const auto middle = std::partition(prims.begin() + first, prims.begin() + first + count, [&](const Prim& p) {
-                return binning.bin(p, a) <= best_split; // the binning's own rule: the sweep's counts
-            });
+            const auto middle =
+                std::partition(prims.begin() + first, prims.begin() + first + count, [&](const Prim& p) {
+                    return binning.bin(p, a) <= best_split; // the binning's own rule: the sweep's counts
+                });
             mid = static_cast<std::uint32_t>(middle - prims.begin());
         }
         if (mid == first || mid == first + count) { // deep, or no axis binned: the median of the widest axis
@@ -218,8 +219,10 @@ private:
             std::nth_element(prims.begin() + first, prims.begin() + mid, prims.begin() + first + count,
                              [a](const Prim& p, const Prim& q) { return p.centroid[a] < q.centroid[a]; });
             Box4<T> lb, lc, rb, rc;
-            for (std::uint32_t i = first; i < mid; ++i) lb.grow(prims[i].lo, prims[i].hi), lc.grow(prims[i].centroid, prims[i].centroid);
-            for (std::uint32_t i = mid; i < first + count; ++i) rb.grow(prims[i].lo, prims[i].hi), rc.grow(prims[i].centroid, prims[i].centroid);
+            for (std::uint32_t i = first; i < mid; ++i)
+                lb.grow(prims[i].lo, prims[i].hi), lc.grow(prims[i].centroid, prims[i].centroid);
+            for (std::uint32_t i = mid; i < first + count; ++i)
+                rb.grow(prims[i].lo, prims[i].hi), rc.grow(prims[i].centroid, prims[i].centroid);
             left_box = lb.box(), left_centroids = lc.box(), right_box = rb.box(), right_centroids = rc.box();
         }
 
@@ -243,13 +246,15 @@ private:
 
     static void clear(Node& n) noexcept {
         for (int a = 0; a < 3; ++a)
-            for (int k = 0; k < 8; ++k) n.lo[a][k] = std::numeric_limits<T>::infinity(), n.hi[a][k] = -std::numeric_limits<T>::infinity();
+            for (int k = 0; k < 8; ++k)
+                n.lo[a][k] = std::numeric_limits<T>::infinity(), n.hi[a][k] = -std::numeric_limits<T>::infinity();
         for (auto& c : n.child) c = empty_child;
     }
 
     void set_child(std::size_t node, int slot, const BinaryNode<T>& child, std::uint32_t ref) {
         Node& n = tree_.nodes_[node];
-        for (int a = 0; a < 3; ++a) n.lo[a][slot] = component(child.box.lo, a), n.hi[a][slot] = component(child.box.hi, a);
+        for (int a = 0; a < 3; ++a)
+            n.lo[a][slot] = component(child.box.lo, a), n.hi[a][slot] = component(child.box.hi, a);
         n.child[slot] = ref;
     }
 
@@ -277,7 +282,8 @@ private:
         }
         wide += node_cost * area;
         n.cost[0] = wide, n.how[0] = 0;
-        if (n.count <= std::uint32_t(leaf_size_) && leaf_cost * area <= wide) n.cost[0] = leaf_cost * area, n.how[0] = n.merged;
+        if (n.count <= std::uint32_t(leaf_size_) && leaf_cost * area <= wide)
+            n.cost[0] = leaf_cost * area, n.how[0] = n.merged;
         for (int j = 2; j <= 8; ++j) {
             n.cost[j - 1] = n.cost[0], n.how[j - 1] = n.how[0];
             for (int i = 1; i < j; ++i) {
@@ -333,7 +339,8 @@ template <class T, class BoxOf>
 /// Builds a BvhTree over primitives with these boxes (index = primitive).
 template <class T>
 [[nodiscard]] BvhTree<T> build_bvh(const std::vector<Box<T>>& boxes, const BvhOptions& options = {}) {
-    return build_bvh<T>(boxes.size(), [&boxes](std::size_t i) { return boxes[i]; }, options);
+    return build_bvh<T>(
+        boxes.size(), [&boxes](std::size_t i) { return boxes[i]; }, options);
 }
 
 } // namespace isin

@@ -101,10 +101,11 @@ inline const T* plane(const Node& n, std::size_t offset) noexcept {
 // `robust` selects SlabRay::robust's form; the portable forms are always robust. Every
 // max/min takes the slab's value first: a NaN there yields the other operand.
 template <bool robust, class T>
-inline unsigned hit_children(const typename BvhTree<T>::Node& n, const SlabRay<T>& r, T t_far, T (&t_near)[8]) noexcept {
+inline unsigned hit_children(const typename BvhTree<T>::Node& n, const SlabRay<T>& r, T t_far,
+                             T (&t_near)[8]) noexcept {
 #if defined(ISIN_DETAIL_SLABS_AVX)
     if constexpr (sizeof(T) == sizeof(float)) { // 8 boxes in one 256-bit register per plane
-        __m256 t0[3], t1[3]; // entry and exit distances of each axis' slab
+        __m256 t0[3], t1[3];                    // entry and exit distances of each axis' slab
         for (int a = 0; a < 3; ++a) {
             const __m256 near_plane = _mm256_load_ps(plane<T>(n, r.near_plane[a]));
             const __m256 far_plane = _mm256_load_ps(plane<T>(n, r.far_plane[a]));
@@ -112,8 +113,10 @@ inline unsigned hit_children(const typename BvhTree<T>::Node& n, const SlabRay<T
             if constexpr (!robust) {
                 // p·inv − o·inv in one FMA; o·inv is rounded, so the entry subtracts and the
                 // exit adds the per-ray allowance (prepare: org_inv_near / org_inv_far).
-                t0[a] = _mm256_fmsub_ps(near_plane, _mm256_set1_ps(float(r.inv[a])), _mm256_set1_ps(float(r.org_inv_near[a])));
-                t1[a] = _mm256_fmsub_ps(far_plane, _mm256_set1_ps(float(r.inv_far[a])), _mm256_set1_ps(float(r.org_inv_far[a])));
+                t0[a] = _mm256_fmsub_ps(near_plane, _mm256_set1_ps(float(r.inv[a])),
+                                        _mm256_set1_ps(float(r.org_inv_near[a])));
+                t1[a] = _mm256_fmsub_ps(far_plane, _mm256_set1_ps(float(r.inv_far[a])),
+                                        _mm256_set1_ps(float(r.org_inv_far[a])));
                 continue;
             }
 #endif
@@ -135,7 +138,7 @@ inline unsigned hit_children(const typename BvhTree<T>::Node& n, const SlabRay<T
 #endif
 #if ISIN_VECTOR_EXTENSIONS
     using V = detail::L8<T>;
-    V tn = V{} , tf = V{} + t_far, near_plane, far_plane;
+    V tn = V{}, tf = V{} + t_far, near_plane, far_plane;
     for (int a = 0; a < 3; ++a) {
         std::memcpy(&near_plane, plane<T>(n, r.near_plane[a]), sizeof near_plane);
         std::memcpy(&far_plane, plane<T>(n, r.far_plane[a]), sizeof far_plane);
@@ -164,7 +167,6 @@ inline unsigned hit_children(const typename BvhTree<T>::Node& n, const SlabRay<T
     return mask;
 #endif
 }
-
 
 template <Visit visit, bool robust, class T, class Leaf>
 bool walk(const BvhTree<T>& tree, const SlabRay<T>& r, T& t_max, Leaf& leaf) {
@@ -258,7 +260,8 @@ bool traverse(const BvhTree<T>& tree, const Ray<T>& ray, T& t_max, Leaf&& leaf) 
     if (tree.empty() || !(t_max > T(0))) return false;
     const detail::SlabRay<T> r = detail::prepare_slab(ray, tree.bound());
     if (!r.ok) return false;
-    return r.robust ? detail::walk<visit, true>(tree, r, t_max, leaf) : detail::walk<visit, false>(tree, r, t_max, leaf);
+    return r.robust ? detail::walk<visit, true>(tree, r, t_max, leaf)
+                    : detail::walk<visit, false>(tree, r, t_max, leaf);
 }
 
 } // namespace isin

@@ -15,7 +15,8 @@
 namespace isin {
 
 namespace detail {
-template <class T> class BvhBuilder;
+template <class T>
+class BvhBuilder;
 }
 
 /// Build options of a Bvh.

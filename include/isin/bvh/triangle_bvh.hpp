@@ -38,7 +38,8 @@ public:
     /// Builds over `triangles`; hits report indices into this vector. Zero-area and non-finite
     /// triangles are left out (no ray can hit them).
     explicit Bvh(const std::vector<Triangle<T>>& triangles, const BvhOptions& options = {})
-        : Bvh(triangles.size(), [&triangles](std::size_t i) { return triangles[i]; }, options) {}
+        : Bvh(
+              triangles.size(), [&triangles](std::size_t i) { return triangles[i]; }, options) {}
 
     /// Builds over the triangles of `mesh`; hits report triangle indices. Throws
     /// std::invalid_argument for an invalid mesh (Mesh::validate).
@@ -48,7 +49,8 @@ public:
     /// Builds over n triangles given by `triangle_of(i)`.
     template <class TriangleOf>
     Bvh(std::size_t n, const TriangleOf& triangle_of, const BvhOptions& options)
-        : tree_(build_bvh<T>(n, [&](std::size_t i) { return bounds(triangle_of(i)); }, options)),
+        : tree_(build_bvh<T>(
+              n, [&](std::size_t i) { return bounds(triangle_of(i)); }, options)),
           blocks_(tree_, triangle_of, detail::thread_count(options.threads)) {}
 
     /// Nearest hit with t in (0, t_max), watertight: a ray through an edge shared by two
@@ -70,20 +72,25 @@ public:
                 return false;
             });
         };
-        if (filter.cull_backfaces) nearest(std::true_type{});
-        else nearest(std::false_type{});
+        if (filter.cull_backfaces)
+            nearest(std::true_type{});
+        else
+            nearest(std::false_type{});
         return best;
     }
 
     /// True when any triangle is hit with t in (0, t_max): shadow rays; stops at the first hit.
     [[nodiscard]] bool occluded(const Ray<T>& ray, T t_max, const HitFilter& filter = {}) const noexcept {
-        if (filter.skip) return for_each_hit(ray, t_max, [](std::uint32_t, const Hit<T>&) { return false; }, filter);
+        if (filter.skip)
+            return for_each_hit(
+                ray, t_max, [](std::uint32_t, const Hit<T>&) { return false; }, filter);
         T t = t_max;
         detail::TriangleRay<T> r(ray);
         const auto any = [&](auto cull) {
             return traverse<Visit::any>(tree_, ray, t, [&](std::uint32_t leaf, T& t_far) {
                 detail::LaneHits<T> unused;
-                return r.ready() && detail::test_block<decltype(cull)::value, false>(blocks_[leaf], r, t_far, unused) != 0;
+                return r.ready() &&
+                       detail::test_block<decltype(cull)::value, false>(blocks_[leaf], r, t_far, unused) != 0;
             });
         };
         return filter.cull_backfaces ? any(std::true_type{}) : any(std::false_type{});
@@ -104,7 +111,8 @@ public:
                 for (; lanes; lanes &= lanes - 1) {
                     const int k = detail::lowest_bit(lanes);
                     if (detail::is_padding(block, k)) continue;
-                    if (!f(block.primitive[k], Hit<T>{hits.t[k], hits.u[k], hits.v[k], block.primitive[k]})) return true;
+                    if (!f(block.primitive[k], Hit<T>{hits.t[k], hits.u[k], hits.v[k], block.primitive[k]}))
+                        return true;
                 }
                 return false;
             });
@@ -137,8 +145,9 @@ public:
     [[nodiscard]] const TriangleBlocks<T>& blocks() const noexcept { return blocks_; }
     /// Bytes held (nodes, leaves, indices, blocks).
     [[nodiscard]] std::size_t memory() const noexcept {
-        return tree_.node_count() * sizeof(typename BvhTree<T>::Node) + tree_.leaf_count() * sizeof(typename BvhTree<T>::Leaf) +
-               tree_.size() * sizeof(std::uint32_t) + blocks_.size() * sizeof(typename TriangleBlocks<T>::Block);
+        return tree_.node_count() * sizeof(typename BvhTree<T>::Node) +
+               tree_.leaf_count() * sizeof(typename BvhTree<T>::Leaf) + tree_.size() * sizeof(std::uint32_t) +
+               blocks_.size() * sizeof(typename TriangleBlocks<T>::Block);
     }
 
     /// The box of a triangle; empty for one no ray can hit (non-finite or zero area), which the
@@ -146,7 +155,8 @@ public:
     [[nodiscard]] static Box<T> bounds(const Triangle<T>& tri) noexcept {
         Box<T> b;
         const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
-        if (!is_finite(tri.v0) || !is_finite(tri.v1) || !is_finite(tri.v2) || detail::is_degenerate(e1, e2, cross(e1, e2)))
+        if (!is_finite(tri.v0) || !is_finite(tri.v1) || !is_finite(tri.v2) ||
+            detail::is_degenerate(e1, e2, cross(e1, e2)))
             return b;
         b.grow(tri.v0), b.grow(tri.v1), b.grow(tri.v2);
         return b;

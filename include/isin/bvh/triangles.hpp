@@ -48,7 +48,8 @@ struct TriangleRay {
     WatertightShear<T> shear;
     bool sheared = false, usable = false;
 
-    explicit TriangleRay(const Ray<T>& ray) noexcept : org{ray.origin.x, ray.origin.y, ray.origin.z}, dir(ray.direction) {}
+    explicit TriangleRay(const Ray<T>& ray) noexcept
+        : org{ray.origin.x, ray.origin.y, ray.origin.z}, dir(ray.direction) {}
     /// Sets the shear on first use; false for a zero or NaN direction (no hit then).
     bool ready() noexcept {
         if (!sheared) sheared = true, usable = shear.set(dir);
@@ -99,7 +100,7 @@ template <bool cull>
         px -= r.org[r.shear.kx], py -= r.org[r.shear.ky], pz -= r.org[r.shear.kz];
         x[v] = px - r.shear.Sx * pz; // WBW: Ax = A[kx] − Sx·A[kz]
         y[v] = py - r.shear.Sy * pz;
-        z[v] = r.shear.Sz * pz;      // WBW: Az = Sz·A[kz]
+        z[v] = r.shear.Sz * pz; // WBW: Az = Sz·A[kz]
     }
     const D X0 = __builtin_convertvector(x[0], D), Y0 = __builtin_convertvector(y[0], D);
     const D X1 = __builtin_convertvector(x[1], D), Y1 = __builtin_convertvector(y[1], D);
@@ -108,8 +109,8 @@ template <bool cull>
     const V Vv = __builtin_convertvector(X0 * Y2 - Y0 * X2, V); // WBW: V = Ax·Cy − Ay·Cx
     const V W = __builtin_convertvector(X1 * Y0 - Y1 * X0, V);  // WBW: W = Bx·Ay − By·Ax
     const V det = U + Vv + W;
-    const V inv_det = 1.0f / det; // lanes with det = 0 give ±∞ or NaN: rejected below
-    const V t = (U * z[0] + Vv * z[1] + W * z[2]) * inv_det; // WBW: t = (U·Az + V·Bz + W·Cz)/det
+    const V inv_det = 1.0f / det;                                // lanes with det = 0 give ±∞ or NaN: rejected below
+    const V t = (U * z[0] + Vv * z[1] + W * z[2]) * inv_det;     // WBW: t = (U·Az + V·Bz + W·Cz)/det
     const auto front = (U >= 0.0f) & (Vv >= 0.0f) & (W >= 0.0f); // clockwise seen from the origin (§2)
     const auto inside = cull ? front : front | ((U <= 0.0f) & (Vv <= 0.0f) & (W <= 0.0f));
     const auto ok = inside & (det != 0.0f) & (t > 0.0f) & (t < t_max);
@@ -188,7 +189,8 @@ public:
 
 private:
     template <class TriangleOf>
-    static void fill(Block& b, const BvhTree<T>& tree, const typename BvhTree<T>::Leaf& leaf, const TriangleOf& triangle_of) {
+    static void fill(Block& b, const BvhTree<T>& tree, const typename BvhTree<T>::Leaf& leaf,
+                     const TriangleOf& triangle_of) {
         for (std::uint32_t k = 0; k < 8; ++k) {
             const std::uint32_t index = tree.primitives()[leaf.first + (k < leaf.count ? k : 0u)];
             const Triangle<T> tri = triangle_of(index);

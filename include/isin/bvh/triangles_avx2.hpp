@@ -26,7 +26,8 @@ struct Sheared8 {
         const __m256 Sx = _mm256_set1_ps(r.shear.Sx), Sy = _mm256_set1_ps(r.shear.Sy);
         for (int v = 0; v < 3; ++v) {
             z[v] = _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kz]), oz);
-            x[v] = _mm256_fnmadd_ps(Sx, z[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+            x[v] = _mm256_fnmadd_ps(
+                Sx, z[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
             y[v] = _mm256_fnmadd_ps(Sy, z[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.ky]), oy));
         }
     }
@@ -42,7 +43,8 @@ struct Halves {
 // a·b − c·d on 8 float lanes exactly as difference_of_products<float> computes it: products of
 // floats are exact in double, their difference is rounded once to double, then to float. No
 // float product is formed, so nothing overflows or underflows on the way.
-inline __m256 exact_difference_of_products8(const Halves& a, const Halves& b, const Halves& c, const Halves& d) noexcept {
+inline __m256 exact_difference_of_products8(const Halves& a, const Halves& b, const Halves& c,
+                                            const Halves& d) noexcept {
     const __m128 lo = _mm256_cvtpd_ps(_mm256_fmsub_pd(a.lo, b.lo, _mm256_mul_pd(c.lo, d.lo)));
     const __m128 hi = _mm256_cvtpd_ps(_mm256_fmsub_pd(a.hi, b.hi, _mm256_mul_pd(c.hi, d.hi)));
     return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
@@ -66,18 +68,22 @@ inline unsigned finish8(__m256 U, __m256 V, __m256 W, const __m256 (&z)[3], floa
     const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
     const __m256 front = _mm256_cmp_ps(_mm256_min_ps(_mm256_min_ps(U, V), W), zero, _CMP_GE_OQ); // clockwise (§2)
     __m256 ok = front;
-    if constexpr (!cull) ok = _mm256_or_ps(front, _mm256_cmp_ps(_mm256_max_ps(_mm256_max_ps(U, V), W), zero, _CMP_LE_OQ));
+    if constexpr (!cull)
+        ok = _mm256_or_ps(front, _mm256_cmp_ps(_mm256_max_ps(_mm256_max_ps(U, V), W), zero, _CMP_LE_OQ));
     ok = _mm256_and_ps(ok, _mm256_cmp_ps(det, zero, _CMP_NEQ_OQ));
     if (_mm256_testz_ps(ok, ok)) return 0; // most blocks end here, before the division
     const __m256 S = _mm256_set1_ps(Sz);
-    const __m256 t_scaled = _mm256_fmadd_ps(W, _mm256_mul_ps(S, z[2]),
-                                            _mm256_fmadd_ps(V, _mm256_mul_ps(S, z[1]), _mm256_mul_ps(U, _mm256_mul_ps(S, z[0])))); // WBW: t·det
+    const __m256 t_scaled = _mm256_fmadd_ps(
+        W, _mm256_mul_ps(S, z[2]),
+        _mm256_fmadd_ps(V, _mm256_mul_ps(S, z[1]), _mm256_mul_ps(U, _mm256_mul_ps(S, z[0])))); // WBW: t·det
     const __m256 inv_det = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
     const __m256 t = _mm256_mul_ps(t_scaled, inv_det);
-    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(t, zero, _CMP_GT_OQ), _mm256_cmp_ps(t, _mm256_set1_ps(t_max), _CMP_LT_OQ)));
+    ok = _mm256_and_ps(
+        ok, _mm256_and_ps(_mm256_cmp_ps(t, zero, _CMP_GT_OQ), _mm256_cmp_ps(t, _mm256_set1_ps(t_max), _CMP_LT_OQ)));
     const unsigned lanes = unsigned(_mm256_movemask_ps(ok));
     if (store && lanes)
-        _mm256_storeu_ps(out.t, t), _mm256_storeu_ps(out.u, _mm256_mul_ps(V, inv_det)), _mm256_storeu_ps(out.v, _mm256_mul_ps(W, inv_det));
+        _mm256_storeu_ps(out.t, t), _mm256_storeu_ps(out.u, _mm256_mul_ps(V, inv_det)),
+            _mm256_storeu_ps(out.v, _mm256_mul_ps(W, inv_det));
     return lanes;
 }
 
@@ -109,9 +115,11 @@ inline unsigned test_block_avx2(const TriangleBlock<float>& b, const TriangleRay
     const __m256 smallest = _mm256_min_ps(_mm256_min_ps(_mm256_and_ps(U, magnitude), _mm256_and_ps(V, magnitude)),
                                           _mm256_and_ps(W, magnitude));
     const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
-    const __m256 trusted = _mm256_and_ps(_mm256_cmp_ps(smallest, _mm256_set1_ps(0x1p-126f), _CMP_GE_OQ),
-                                         _mm256_cmp_ps(_mm256_and_ps(det, magnitude), _mm256_set1_ps(0x1p126f), _CMP_LT_OQ));
-    if (!_mm256_testc_ps(trusted, _mm256_castsi256_ps(_mm256_set1_epi32(-1)))) return test_block_exact<cull, store>(b, r, t_max, out);
+    const __m256 trusted =
+        _mm256_and_ps(_mm256_cmp_ps(smallest, _mm256_set1_ps(0x1p-126f), _CMP_GE_OQ),
+                      _mm256_cmp_ps(_mm256_and_ps(det, magnitude), _mm256_set1_ps(0x1p126f), _CMP_LT_OQ));
+    if (!_mm256_testc_ps(trusted, _mm256_castsi256_ps(_mm256_set1_epi32(-1))))
+        return test_block_exact<cull, store>(b, r, t_max, out);
     return finish8<cull, store>(U, V, W, p.z, r.shear.Sz, t_max, out);
 }
 
@@ -136,7 +144,8 @@ inline unsigned test_block_avx2(const TriangleBlock<double>& b, const TriangleRa
         __m256d x[3], y[3], z[3];
         for (int v = 0; v < 3; ++v) {
             z[v] = _mm256_sub_pd(_mm256_load_pd(b.v[v][r.shear.kz] + half), oz);
-            x[v] = _mm256_fnmadd_pd(Sx, z[v], _mm256_sub_pd(_mm256_load_pd(b.v[v][r.shear.kx] + half), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+            x[v] = _mm256_fnmadd_pd(
+                Sx, z[v], _mm256_sub_pd(_mm256_load_pd(b.v[v][r.shear.kx] + half), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
             y[v] = _mm256_fnmadd_pd(Sy, z[v], _mm256_sub_pd(_mm256_load_pd(b.v[v][r.shear.ky] + half), oy));
         }
         const __m256d U = kahan_difference_of_products4(x[2], y[1], y[2], x[1]); // WBW: U = Cx·By − Cy·Bx
@@ -145,14 +154,17 @@ inline unsigned test_block_avx2(const TriangleBlock<double>& b, const TriangleRa
         const __m256d det = _mm256_add_pd(_mm256_add_pd(U, V), W);
         const __m256d front = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(U, V), W), zero, _CMP_GE_OQ); // clockwise (§2)
         __m256d ok = front;
-        if constexpr (!cull) ok = _mm256_or_pd(front, _mm256_cmp_pd(_mm256_max_pd(_mm256_max_pd(U, V), W), zero, _CMP_LE_OQ));
+        if constexpr (!cull)
+            ok = _mm256_or_pd(front, _mm256_cmp_pd(_mm256_max_pd(_mm256_max_pd(U, V), W), zero, _CMP_LE_OQ));
         ok = _mm256_and_pd(ok, _mm256_cmp_pd(det, zero, _CMP_NEQ_OQ));
         if (_mm256_testz_pd(ok, ok)) continue;
-        const __m256d t_scaled = _mm256_fmadd_pd(W, _mm256_mul_pd(Sz, z[2]),
-                                                 _mm256_fmadd_pd(V, _mm256_mul_pd(Sz, z[1]), _mm256_mul_pd(U, _mm256_mul_pd(Sz, z[0])))); // WBW: t·det
+        const __m256d t_scaled = _mm256_fmadd_pd(
+            W, _mm256_mul_pd(Sz, z[2]),
+            _mm256_fmadd_pd(V, _mm256_mul_pd(Sz, z[1]), _mm256_mul_pd(U, _mm256_mul_pd(Sz, z[0])))); // WBW: t·det
         const __m256d inv_det = _mm256_div_pd(_mm256_set1_pd(1.0), det);
         const __m256d t = _mm256_mul_pd(t_scaled, inv_det);
-        ok = _mm256_and_pd(ok, _mm256_and_pd(_mm256_cmp_pd(t, zero, _CMP_GT_OQ), _mm256_cmp_pd(t, _mm256_set1_pd(t_max), _CMP_LT_OQ)));
+        ok = _mm256_and_pd(
+            ok, _mm256_and_pd(_mm256_cmp_pd(t, zero, _CMP_GT_OQ), _mm256_cmp_pd(t, _mm256_set1_pd(t_max), _CMP_LT_OQ)));
         const unsigned half_lanes = unsigned(_mm256_movemask_pd(ok));
         if (!half_lanes) continue;
         if (!store) return half_lanes << half;

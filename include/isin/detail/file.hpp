@@ -27,9 +27,7 @@
 namespace isin::detail {
 
 /// The message of an errno value.
-[[nodiscard]] inline std::string errno_text(int err) {
-    return std::error_code(err, std::generic_category()).message();
-}
+[[nodiscard]] inline std::string errno_text(int err) { return std::error_code(err, std::generic_category()).message(); }
 
 /// Why a file of `size` bytes is refused under `limits`, or "".
 [[nodiscard]] inline std::string file_too_large(std::uintmax_t size, const ReadLimits& limits) {
@@ -146,7 +144,8 @@ template <class Bytes>
 /// disk, then renamed onto `path`; on any failure the temporary is removed and an existing file
 /// at `path` is left as it was. Returns "" or why not. The temporary's name is short and is used
 /// relative to the directory, so every name the file system accepts for `path` works.
-[[nodiscard]] inline std::string write_file_atomically(const std::string& path, const std::vector<unsigned char>& bytes) {
+[[nodiscard]] inline std::string write_file_atomically(const std::string& path,
+                                                       const std::vector<unsigned char>& bytes) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) return "is a directory";
     const std::filesystem::path target(path);
@@ -167,7 +166,8 @@ template <class Bytes>
         tmp = temporary_name();
         out.adopt(::openat(dir_fd.get(), tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666));
         if (out.get() >= 0) break;
-        if (errno != EEXIST || attempt >= 100) return "cannot create a temporary file in its directory: " + errno_text(errno);
+        if (errno != EEXIST || attempt >= 100)
+            return "cannot create a temporary file in its directory: " + errno_text(errno);
     }
     const auto fail = [&](const char* what, int err) {
         out.reset();
@@ -189,7 +189,8 @@ template <class Bytes>
     const std::filesystem::path tmp = dir / temporary_name();
     {
         errno = 0;
-        const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(tmp.string().c_str(), "wb"), &std::fclose);
+        const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(tmp.string().c_str(), "wb"),
+                                                                   &std::fclose);
         if (!file) return "cannot create a temporary file in its directory: " + errno_text(errno);
         if ((!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), file.get()) != bytes.size()) ||
             std::fflush(file.get()) != 0) {

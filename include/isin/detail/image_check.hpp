@@ -30,10 +30,12 @@ struct ImageCheck {
 
 /// "" if a width × height image is within the budget, else why not.
 [[nodiscard]] inline std::string pixel_budget(std::uint64_t width, std::uint64_t height, const ReadLimits& limits) {
-    if (width == 0 || height == 0) return "the image has no pixels (" + std::to_string(width) + "×" + std::to_string(height) + ")";
+    if (width == 0 || height == 0)
+        return "the image has no pixels (" + std::to_string(width) + "×" + std::to_string(height) + ")";
     if (width * height <= limits.max_pixels) return "";
-    return "the image is " + std::to_string(width) + "×" + std::to_string(height) + " = " + std::to_string(width * height) +
-           " pixels, more than the limit of " + std::to_string(limits.max_pixels) + " (ReadLimits::max_pixels)";
+    return "the image is " + std::to_string(width) + "×" + std::to_string(height) + " = " +
+           std::to_string(width * height) + " pixels, more than the limit of " + std::to_string(limits.max_pixels) +
+           " (ReadLimits::max_pixels)";
 }
 
 [[nodiscard]] inline bool is_png(const unsigned char* p, std::size_t n) noexcept {
@@ -73,7 +75,9 @@ struct ImageCheck {
             return c;
         }
         const unsigned char* data = p + pos + 8;
-        const auto is = [type](const char* name) { return type == big_endian32(reinterpret_cast<const unsigned char*>(name)); };
+        const auto is = [type](const char* name) {
+            return type == big_endian32(reinterpret_cast<const unsigned char*>(name));
+        };
         if (!header && !is("CgBI")) {
             if (!is("IHDR") || length != 13) {
                 c.why = "malformed PNG: the first chunk is not a 13-byte IHDR";
@@ -144,7 +148,7 @@ struct ImageCheck {
         while (pos < n && p[pos] == 0xff) ++pos; // fill bytes
         if (pos >= n) return fail("truncated JPEG: no EOI marker");
         const unsigned marker = p[pos++];
-        if (marker == 0xd9) break;                                           // EOI
+        if (marker == 0xd9) break;                                          // EOI
         if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd8)) continue; // TEM, RSTn, SOI: no length
         if (n - pos < 2) return fail("truncated JPEG: marker segment at byte " + std::to_string(pos - 2));
         const std::size_t length = big_endian16(p + pos);
@@ -225,7 +229,8 @@ struct ImageCheck {
             }
             entropy_bytes += pos - start;
         } else if (!(marker == 0xdd || marker == 0xdc || (marker >= 0xe0 && marker <= 0xef) || marker == 0xfe)) {
-            return fail("unsupported JPEG: marker 0x" + std::string{"0123456789ABCDEF"[marker >> 4], "0123456789ABCDEF"[marker & 15]} +
+            return fail("unsupported JPEG: marker 0x" +
+                        std::string{"0123456789ABCDEF"[marker >> 4], "0123456789ABCDEF"[marker & 15]} +
                         " (lossless, hierarchical and arithmetic-coded JPEG are not read)");
         }
     }
@@ -235,9 +240,9 @@ struct ImageCheck {
             if (!quant[comp[i].tq]) return fail("corrupt JPEG: a component's quantisation table is not defined");
     const std::uint64_t blocks = (std::uint64_t(c.width) + 7) / 8 * ((std::uint64_t(c.height) + 7) / 8);
     if (entropy_bytes * 8 < blocks)
-        return fail("truncated or corrupt JPEG: " + std::to_string(entropy_bytes) + " bytes of image data cannot code the " +
-                    std::to_string(blocks) + " blocks of a " + std::to_string(c.width) + "×" + std::to_string(c.height) +
-                    " image");
+        return fail("truncated or corrupt JPEG: " + std::to_string(entropy_bytes) +
+                    " bytes of image data cannot code the " + std::to_string(blocks) + " blocks of a " +
+                    std::to_string(c.width) + "×" + std::to_string(c.height) + " image");
     return c;
 }
 

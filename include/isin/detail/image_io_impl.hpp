@@ -24,8 +24,7 @@ namespace isin {
 
 namespace detail {
 
-[[nodiscard]] inline std::runtime_error file_error(const char* who, const std::string& path,
-                                                   const std::string& why) {
+[[nodiscard]] inline std::runtime_error file_error(const char* who, const std::string& path, const std::string& why) {
     return std::runtime_error(std::string(who) + ": '" + path + "': " + why);
 }
 
@@ -37,8 +36,8 @@ inline void write_file(const char* who, const std::string& path, const std::vect
 
 /// Binary PPM (P6, maxval 255) of `image`.
 [[nodiscard]] inline std::vector<unsigned char> encode_ppm(const Image& image) {
-    const std::string header = "P6\n" + std::to_string(image.width()) + " " +
-                               std::to_string(image.height()) + "\n255\n";
+    const std::string header =
+        "P6\n" + std::to_string(image.width()) + " " + std::to_string(image.height()) + "\n255\n";
     std::vector<unsigned char> bytes(header.begin(), header.end());
     bytes.reserve(header.size() + image.pixels().size() * 3);
     for (const Rgb8& p : image.pixels()) {
@@ -75,12 +74,10 @@ inline void write_file(const char* who, const std::string& path, const std::vect
         while (pos < size && bytes[pos] >= '0' && bytes[pos] <= '9') {
             value = value * 10 + (bytes[pos] - '0');
             if (value > max)
-                throw file_error(who, path, std::string("PPM ") + what + " is larger than " +
-                                                std::to_string(max));
+                throw file_error(who, path, std::string("PPM ") + what + " is larger than " + std::to_string(max));
             ++pos;
         }
-        if (pos == start || value < 1)
-            throw file_error(who, path, std::string("malformed PPM header: bad ") + what);
+        if (pos == start || value < 1) throw file_error(who, path, std::string("malformed PPM header: bad ") + what);
         return value;
     };
     const int w = int(number("width", Image::max_side));
@@ -94,9 +91,9 @@ inline void write_file(const char* who, const std::string& path, const std::vect
     const std::size_t sample_size = maxval < 256 ? 1 : 2;
     const std::size_t needed = std::size_t(w) * std::size_t(h) * 3 * sample_size;
     if (size - pos < needed)
-        throw file_error(who, path, "truncated PPM: " + std::to_string(needed) +
-                                        " bytes of pixels expected, " +
-                                        std::to_string(size - pos) + " found");
+        throw file_error(who, path,
+                         "truncated PPM: " + std::to_string(needed) + " bytes of pixels expected, " +
+                             std::to_string(size - pos) + " found");
     Image image(w, h);
     const auto sample = [&]() -> std::uint8_t {
         long s = bytes[pos++];
@@ -131,7 +128,8 @@ enum class ImageFormat { png, ppm };
         if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
     if (ext == ".png") return ImageFormat::png;
     if (ext == ".ppm") return ImageFormat::ppm;
-    throw std::invalid_argument(std::string(who) + ": '" + path + "': unknown extension '" + ext + "' (use .png or .ppm)");
+    throw std::invalid_argument(std::string(who) + ": '" + path + "': unknown extension '" + ext +
+                                "' (use .png or .ppm)");
 }
 
 /// Whether stb's PNG encoder takes a width × height image: it counts bytes in int, so the
@@ -168,14 +166,15 @@ void write_png(const Image& image, const std::string& path) {
             s->failed = true;
         }
     };
-    const int ok = stbi_write_png_to_func(append, &sink, image.width(), image.height(), 3,
-                                          image.data(), image.width() * 3);
+    const int ok =
+        stbi_write_png_to_func(append, &sink, image.width(), image.height(), 3, image.data(), image.width() * 3);
     if (!ok || sink.failed) throw detail::file_error(who, path, "PNG encoding failed (out of memory)");
     detail::write_file(who, path, sink.bytes);
 #else
     (void)image;
-    throw detail::file_error(who, path, "writing PNG needs the stb headers (Debian/Ubuntu: "
-                                        "install libstb-dev); PPM works without them");
+    throw detail::file_error(who, path,
+                             "writing PNG needs the stb headers (Debian/Ubuntu: "
+                             "install libstb-dev); PPM works without them");
 #endif
 }
 
@@ -207,14 +206,17 @@ Image read_image_from_memory(const void* data, std::size_t size, const ReadLimit
     if (size >= 2 && bytes[0] == 'P' && bytes[1] == '6') return detail::decode_ppm(bytes, size, name, limits);
     std::vector<unsigned char> fixed; // a PNG without its empty leading IDAT chunks, if it has any
     detail::ImageCheck check;
-    if (detail::is_png(bytes, size)) check = detail::check_png(bytes, size, limits, fixed);
-    else if (detail::is_jpeg(bytes, size)) check = detail::check_jpeg(bytes, size, limits);
-    else throw detail::file_error(who, name, "not a PNG, JPEG or binary PPM image");
+    if (detail::is_png(bytes, size))
+        check = detail::check_png(bytes, size, limits, fixed);
+    else if (detail::is_jpeg(bytes, size))
+        check = detail::check_jpeg(bytes, size, limits);
+    else
+        throw detail::file_error(who, name, "not a PNG, JPEG or binary PPM image");
     if (!check.why.empty()) throw detail::file_error(who, name, check.why);
     if (check.width > std::uint32_t(Image::max_side) || check.height > std::uint32_t(Image::max_side))
-        throw detail::file_error(who, name, "image size " + std::to_string(check.width) + "×" +
-                                                std::to_string(check.height) + " is not supported (sides up to " +
-                                                std::to_string(Image::max_side) + ")");
+        throw detail::file_error(who, name,
+                                 "image size " + std::to_string(check.width) + "×" + std::to_string(check.height) +
+                                     " is not supported (sides up to " + std::to_string(Image::max_side) + ")");
 #if ISIN_HAVE_STB
     if (!fixed.empty()) bytes = fixed.data(), size = fixed.size();
     if (size > std::size_t(INT_MAX)) throw detail::file_error(who, name, "data too large for the decoder");
@@ -234,8 +236,9 @@ Image read_image_from_memory(const void* data, std::size_t size, const ReadLimit
         out[i] = Rgb8{in[3 * i], in[3 * i + 1], in[3 * i + 2]};
     return image;
 #else
-    throw detail::file_error(who, name, "not a binary PPM; reading PNG or JPEG needs the stb "
-                                        "headers (Debian/Ubuntu: install libstb-dev)");
+    throw detail::file_error(who, name,
+                             "not a binary PPM; reading PNG or JPEG needs the stb "
+                             "headers (Debian/Ubuntu: install libstb-dev)");
 #endif
 }
 

@@ -43,8 +43,7 @@ namespace isin {
 
 namespace detail {
 
-[[nodiscard]] inline MeshError mesh_error(const char* who, const std::string& path,
-                                          const std::string& why) {
+[[nodiscard]] inline MeshError mesh_error(const char* who, const std::string& path, const std::string& why) {
     return MeshError(std::string(who) + ": '" + path + "': " + why);
 }
 
@@ -76,9 +75,12 @@ namespace detail {
 
 template <class T>
 [[nodiscard]] constexpr const char* mesh_type_name() noexcept {
-    if constexpr (std::is_same_v<T, float>) return "float";
-    else if constexpr (std::is_same_v<T, double>) return "double";
-    else return "long double";
+    if constexpr (std::is_same_v<T, float>)
+        return "float";
+    else if constexpr (std::is_same_v<T, double>)
+        return "double";
+    else
+        return "long double";
 }
 
 /// True when the finite `v` is representable in T (converting anything larger is undefined).
@@ -196,13 +198,11 @@ enum class NumberStatus { ok, malformed, out_of_range };
 }
 
 /// Why a real-number token is bad, for messages; `what` is e.g. "coordinate".
-[[nodiscard]] inline std::string mesh_bad_real(const char* what, const char* b, const char* e,
-                                               NumberStatus status) {
+[[nodiscard]] inline std::string mesh_bad_real(const char* what, const char* b, const char* e, NumberStatus status) {
     const int special = mesh_special_word(b, e);
     if (special == 1) return std::string("NaN ") + what + " " + mesh_quote(b, e);
     if (special == 2) return std::string("infinite ") + what + " " + mesh_quote(b, e);
-    if (status == NumberStatus::out_of_range)
-        return std::string(what) + " " + mesh_quote(b, e) + " is out of range";
+    if (status == NumberStatus::out_of_range) return std::string(what) + " " + mesh_quote(b, e) + " is out of range";
     return std::string("malformed number ") + mesh_quote(b, e);
 }
 
@@ -251,7 +251,8 @@ inline void obj_for_each_line(std::string_view text, F&& f) {
 /// digits are undefined behaviour) and counts digits in an int; isin refuses such tokens first.
 [[nodiscard]] inline std::string obj_unsafe_number(const char* b, const char* e) {
     constexpr std::ptrdiff_t longest = 4096;
-    if (e - b > longest) return "number " + mesh_quote(b, e) + " is longer than " + std::to_string(longest) + " characters";
+    if (e - b > longest)
+        return "number " + mesh_quote(b, e) + " is longer than " + std::to_string(longest) + " characters";
     for (const char* p = b; p != e; ++p) {
         if (*p != 'e' && *p != 'E') continue;
         const char* d = p + 1;
@@ -265,8 +266,7 @@ inline void obj_for_each_line(std::string_view text, F&& f) {
 }
 
 /// Next token separated by spaces or tabs; false at the end of the line.
-[[nodiscard]] inline bool obj_token(const char*& p, const char* e, const char*& tb,
-                                    const char*& te) noexcept {
+[[nodiscard]] inline bool obj_token(const char*& p, const char* e, const char*& tb, const char*& te) noexcept {
     while (p != e && (*p == ' ' || *p == '\t')) ++p;
     if (p == e) return false;
     tb = p;
@@ -371,8 +371,7 @@ template <class T>
 }
 
 /// Line number of the `ordinal`-th (from 0) statement of `kind` ('v' or 'f'); 0 if none.
-[[nodiscard]] inline std::size_t obj_statement_line(std::string_view text, char kind,
-                                                    std::size_t ordinal) {
+[[nodiscard]] inline std::size_t obj_statement_line(std::string_view text, char kind, std::size_t ordinal) {
     std::size_t seen = 0, found = 0;
     obj_for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
         if (obj_statement(b, e) == kind && seen++ == ordinal) {
@@ -402,7 +401,7 @@ struct ObjCollector {
     std::vector<Vertex<T>> vertices;
     std::vector<std::array<std::size_t, 3>> triangles;
     std::vector<std::pair<std::size_t, long long>> forward; // (face, index) beyond vertices so far
-    std::vector<std::size_t> redo; // vertices whose value tinyobjloader got wrong, in order
+    std::vector<std::size_t> redo;                          // vertices whose value tinyobjloader got wrong, in order
     std::size_t faces = 0;
     char bad_kind = 0;
     std::size_t bad_ordinal = 0;
@@ -445,8 +444,9 @@ struct ObjCollector {
             if (raw < 0) { // relative: −1 is the last vertex read so far
                 const auto back = static_cast<std::size_t>(-static_cast<long long>(raw));
                 if (back > count) {
-                    c.fail('f', face, "vertex index " + std::to_string(raw) + " is out of range (" +
-                                          std::to_string(count) + " vertices precede it)");
+                    c.fail('f', face,
+                           "vertex index " + std::to_string(raw) + " is out of range (" + std::to_string(count) +
+                               " vertices precede it)");
                     ok = false;
                     return 0;
                 }
@@ -489,9 +489,13 @@ enum class PlyType : unsigned char { none, i8, u8, i16, u16, i32, u32, f32, f64 
 
 [[nodiscard]] constexpr std::size_t ply_size(PlyType t) noexcept {
     switch (t) {
-    case PlyType::i8: case PlyType::u8: return 1;
-    case PlyType::i16: case PlyType::u16: return 2;
-    case PlyType::i32: case PlyType::u32: case PlyType::f32: return 4;
+    case PlyType::i8:
+    case PlyType::u8: return 1;
+    case PlyType::i16:
+    case PlyType::u16: return 2;
+    case PlyType::i32:
+    case PlyType::u32:
+    case PlyType::f32: return 4;
     case PlyType::f64: return 8;
     default: return 0;
     }
@@ -540,8 +544,7 @@ struct PlyHeader {
 
 /// Parses the header and marks the properties isin reads (x, y, z of `vertex`, the index list
 /// of `face`).
-[[nodiscard]] inline PlyHeader ply_parse_header(const char* who, const std::string& path,
-                                                std::string_view file) {
+[[nodiscard]] inline PlyHeader ply_parse_header(const char* who, const std::string& path, std::string_view file) {
     PlyHeader h;
     std::size_t pos = 0, line = 0;
     std::vector<std::string> tokens;
@@ -552,8 +555,7 @@ struct PlyHeader {
     for (;;) {
         if (pos >= file.size()) {
             if (line == 0) throw mesh_error(who, path, "not a PLY file (empty)");
-            throw mesh_error(who, path, "truncated header at line " + std::to_string(line) +
-                                            ": no end_header");
+            throw mesh_error(who, path, "truncated header at line " + std::to_string(line) + ": no end_header");
         }
         std::size_t end = file.find('\n', pos);
         if (end == std::string::npos) end = file.size();
@@ -748,10 +750,18 @@ private:
         std::uint64_t u = 0;
         for (std::size_t i = n; i-- > 0;) u = (u << 8) | static_cast<std::uint64_t>(p[i]);
         V v;
-        if constexpr (sizeof(V) == 1) { const auto b = static_cast<std::uint8_t>(u); std::memcpy(&v, &b, 1); }
-        else if constexpr (sizeof(V) == 2) { const auto b = static_cast<std::uint16_t>(u); std::memcpy(&v, &b, 2); }
-        else if constexpr (sizeof(V) == 4) { const auto b = static_cast<std::uint32_t>(u); std::memcpy(&v, &b, 4); }
-        else { std::memcpy(&v, &u, 8); }
+        if constexpr (sizeof(V) == 1) {
+            const auto b = static_cast<std::uint8_t>(u);
+            std::memcpy(&v, &b, 1);
+        } else if constexpr (sizeof(V) == 2) {
+            const auto b = static_cast<std::uint16_t>(u);
+            std::memcpy(&v, &b, 2);
+        } else if constexpr (sizeof(V) == 4) {
+            const auto b = static_cast<std::uint32_t>(u);
+            std::memcpy(&v, &b, 4);
+        } else {
+            std::memcpy(&v, &u, 8);
+        }
         return v;
     }
 
@@ -764,10 +774,8 @@ private:
 /// ASCII data: whitespace-separated numbers; positions are line numbers.
 class PlyAsciiReader {
 public:
-    PlyAsciiReader(const char* who, const std::string& path, std::string_view file, std::size_t pos,
-                   std::size_t line)
-        : who_(who), path_(path), data_(file.data()), size_(file.size()), pos_(pos), line_(line),
-          start_line_(line) {}
+    PlyAsciiReader(const char* who, const std::string& path, std::string_view file, std::size_t pos, std::size_t line)
+        : who_(who), path_(path), data_(file.data()), size_(file.size()), pos_(pos), line_(line), start_line_(line) {}
 
     PlyContext context;
 
@@ -783,8 +791,7 @@ public:
         const std::size_t least = 2 * el.properties.size();
         if (least > 0 && el.count > (size_ - pos_ + 1) / least)
             truncated("element " + mesh_quote(el.name.data(), el.name.data() + el.name.size()) + " declares " +
-                      std::to_string(el.count) + " entries, but " +
-                      std::to_string(size_ - pos_) + " bytes follow");
+                      std::to_string(el.count) + " entries, but " + std::to_string(size_ - pos_) + " bytes follow");
     }
     [[nodiscard]] std::size_t remaining() const noexcept { return size_ - pos_; }
     [[nodiscard]] static std::size_t least_size(PlyType) noexcept { return 2; }
@@ -817,8 +824,7 @@ public:
         for (unsigned long long i = 0; i < count; ++i) next();
     }
     void need_items(PlyType, unsigned long long count) const {
-        if (count > (size_ - pos_ + 1) / 2)
-            truncated(context.text() + ": list of " + std::to_string(count) + " items");
+        if (count > (size_ - pos_ + 1) / 2) truncated(context.text() + ": list of " + std::to_string(count) + " items");
     }
     /// Nothing but whitespace may follow the last element.
     void finish() {
@@ -882,8 +888,8 @@ inline void ply_read_body(Reader& r, const PlyHeader& h, std::vector<Vertex<T>>&
                     if (std::isnan(v)) r.fail(std::string("coordinate ") + axis + " is NaN");
                     if (!std::isfinite(v)) r.fail(std::string("coordinate ") + axis + " is infinite");
                     if (!mesh_fits<T>(v))
-                        r.fail(std::string("coordinate ") + axis + " = " + mesh_number(v) +
-                               " does not fit in " + mesh_type_name<T>());
+                        r.fail(std::string("coordinate ") + axis + " = " + mesh_number(v) + " does not fit in " +
+                               mesh_type_name<T>());
                     xyz[p.role == PlyRole::x ? 0 : p.role == PlyRole::y ? 1 : 2] = static_cast<T>(v);
                     continue;
                 }
@@ -902,8 +908,10 @@ inline void ply_read_body(Reader& r, const PlyHeader& h, std::vector<Vertex<T>>&
                         r.fail("vertex index " + std::to_string(index) + " is out of range (the file has " +
                                std::to_string(h.vertex_count) + " vertices)");
                     const auto cur = static_cast<std::size_t>(index);
-                    if (k == 0) v0 = cur;
-                    else if (k > 1) triangles.push_back({v0, prev, cur}); // fan (v0, vi, vi+1)
+                    if (k == 0)
+                        v0 = cur;
+                    else if (k > 1)
+                        triangles.push_back({v0, prev, cur}); // fan (v0, vi, vi+1)
                     prev = cur;
                 }
             }
@@ -951,8 +959,9 @@ template <class T>
         if (static_cast<std::size_t>(raw) <= c.vertices.size()) continue;
         if (c.bad_kind && c.bad_ordinal < face) break; // report whichever face comes first
         c.bad_kind = 0;
-        c.fail('f', face, "vertex index " + std::to_string(raw) + " is out of range (the file has " +
-                              std::to_string(c.vertices.size()) + " vertices)");
+        c.fail('f', face,
+               "vertex index " + std::to_string(raw) + " is out of range (the file has " +
+                   std::to_string(c.vertices.size()) + " vertices)");
         break;
     }
     if (c.bad_kind) throw at_line(c.bad_kind, c.bad_ordinal, c.bad_why);
@@ -961,7 +970,8 @@ template <class T>
     return mesh_triangles(c.vertices, c.triangles);
 #else
     (void)text;
-    throw std::runtime_error(std::string(who) + ": '" + name + "': reading OBJ needs tinyobjloader "
+    throw std::runtime_error(std::string(who) + ": '" + name +
+                             "': reading OBJ needs tinyobjloader "
                              "(Debian/Ubuntu: install libtinyobjloader-dev); PLY works without it");
 #endif
 }
@@ -1023,15 +1033,14 @@ std::vector<Triangle<T>> load_mesh(const std::string& path, const ReadLimits& li
         if (ch >= 'A' && ch <= 'Z') ch = static_cast<char>(ch - 'A' + 'a');
     if (ext == ".obj") return load_obj<T>(path, limits);
     if (ext == ".ply") return load_ply<T>(path, limits);
-    throw std::invalid_argument("isin::load_mesh: '" + path + "': unknown extension '" + ext +
-                                "' (use .obj or .ply)");
+    throw std::invalid_argument("isin::load_mesh: '" + path + "': unknown extension '" + ext + "' (use .obj or .ply)");
 }
 
-#define ISIN_DETAIL_MESH_IO(T)                                                                            \
-    template std::vector<Triangle<T>> load_obj<T>(const std::string&, const ReadLimits&);                \
-    template std::vector<Triangle<T>> load_ply<T>(const std::string&, const ReadLimits&);                \
-    template std::vector<Triangle<T>> load_mesh_from_memory<T>(const void*, std::size_t, MeshFormat,     \
-                                                                const std::string&);                     \
+#define ISIN_DETAIL_MESH_IO(T)                                                                                         \
+    template std::vector<Triangle<T>> load_obj<T>(const std::string&, const ReadLimits&);                              \
+    template std::vector<Triangle<T>> load_ply<T>(const std::string&, const ReadLimits&);                              \
+    template std::vector<Triangle<T>> load_mesh_from_memory<T>(const void*, std::size_t, MeshFormat,                   \
+                                                               const std::string&);                                    \
     template std::vector<Triangle<T>> load_mesh<T>(const std::string&, const ReadLimits&);
 ISIN_DETAIL_MESH_IO(float)
 ISIN_DETAIL_MESH_IO(double)

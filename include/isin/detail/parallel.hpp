@@ -69,7 +69,8 @@ void run_workers(int count, Body&& body) {
 /// threads (run_workers: chunks are taken from a shared counter, exceptions reach the caller).
 template <class F>
 void parallel_chunks(std::size_t n, int threads, std::size_t min_chunk, const F& f) {
-    const std::size_t parts = std::max<std::size_t>(1, std::min(std::size_t(std::max(threads, 1)), n / std::max<std::size_t>(min_chunk, 1)));
+    const std::size_t parts =
+        std::max<std::size_t>(1, std::min(std::size_t(std::max(threads, 1)), n / std::max<std::size_t>(min_chunk, 1)));
     const std::size_t chunk = (n + parts - 1) / parts;
     std::atomic<std::size_t> next{0};
     run_workers(int(parts), [&](int, const FirstError& error) {

@@ -56,7 +56,8 @@
 #if ISIN_DETAIL_STB_IMAGE != 0 && ISIN_DETAIL_STB_IMAGE_WRITE != 0
 #define ISIN_HAVE_STB 1
 #else
-#error "isin: PNG and JPEG files need the stb headers: install Debian/Ubuntu's libstb-dev (stb_image.h, stb_image_write.h), or define ISIN_HAVE_STB to 0 to build with PPM files only"
+#error                                                                                                                 \
+    "isin: PNG and JPEG files need the stb headers: install Debian/Ubuntu's libstb-dev (stb_image.h, stb_image_write.h), or define ISIN_HAVE_STB to 0 to build with PPM files only"
 #endif
 #endif
 

@@ -49,7 +49,8 @@
 #if ISIN_DETAIL_TINYOBJ != 0
 #define ISIN_HAVE_TINYOBJLOADER 1
 #else
-#error "isin: OBJ files need tinyobjloader: install Debian/Ubuntu's libtinyobjloader-dev (tiny_obj_loader.h), or define ISIN_HAVE_TINYOBJLOADER to 0 to build with PLY files only"
+#error                                                                                                                 \
+    "isin: OBJ files need tinyobjloader: install Debian/Ubuntu's libtinyobjloader-dev (tiny_obj_loader.h), or define ISIN_HAVE_TINYOBJLOADER to 0 to build with PLY files only"
 #endif
 #endif
 #if ISIN_HAVE_TINYOBJLOADER && ISIN_DETAIL_TINYOBJ == 2
