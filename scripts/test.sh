@@ -1,23 +1,36 @@
 #!/usr/bin/env bash
-# Quick start, command 2: installs what is missing, then runs the stability and BVH tests with
-# g++ and clang++ at -O0 and at -O3 -march=native (their guarantees must survive any FMA
-# contraction), the whole test suite four times — g++ and clang++ with warnings as errors,
-# clang++ with AddressSanitizer and UndefinedBehaviorSanitizer, clang++ with ThreadSanitizer —
-# and fuzzes the file readers (scripts/fuzz.sh, ISIN_FUZZ_SECONDS per target, default 45;
-# 0 skips it). set -e stops at the first configuration that fails.
+# Quick start, command 2: installs what is missing, then
+#  1. checks the layout of every C++ file (scripts/format.sh --check, .clang-format);
+#  2. runs the stability and BVH tests with g++ and clang++ at -O0 and at -O3 -march=native
+#     (their guarantees must survive any FMA contraction), on the portable path with no vector
+#     extension or intrinsic (-DISIN_FORCE_PURE=ON) and on the AVX path without FMA
+#     (-mavx -mno-fma);
+#  3. runs the whole test suite four times — g++ and clang++ with warnings as errors, clang++ with
+#     AddressSanitizer and UndefinedBehaviorSanitizer, clang++ with ThreadSanitizer;
+#  4. compiles the benchmarks (against Embree: libembree-dev), warnings as errors, without
+#     running them;
+#  5. fuzzes the file readers (scripts/fuzz.sh, ISIN_FUZZ_SECONDS per target, default 45; 0
+#     skips it).
+# set -e stops at the first step that fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/deps.sh
+bash scripts/deps.sh clang-format parallel libembree-dev
 jobs=$(nproc)
-for cxx in g++ clang++; do
-  for flags in "-O0" "-O3 -march=native"; do
-    dir="build/stability-$cxx${flags// /}"
-    echo "== isin: stability tests, $cxx $flags" >&2
-    cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=None \
-      -DCMAKE_CXX_FLAGS="$flags" -DISIN_WERROR=ON -DISIN_BUILD_EXAMPLES=OFF >/dev/null
-    cmake --build "$dir" -j"$jobs" --target test_stability test_bvh
-    ctest --test-dir "$dir" -R '^(test_stability|test_bvh)$' --output-on-failure
-  done
+bash scripts/format.sh --check
+# compiler | flags | extra CMake arguments
+configurations=(
+  "g++|-O0|" "g++|-O3 -march=native|" "clang++|-O0|" "clang++|-O3 -march=native|"
+  "g++|-O2|-DISIN_FORCE_PURE=ON" "clang++|-O3 -march=native|-DISIN_FORCE_PURE=ON"
+  "g++|-O2 -mavx -mno-fma|" "clang++|-O3 -mavx -mno-fma|"
+)
+for configuration in "${configurations[@]}"; do
+  IFS='|' read -r cxx flags extra <<<"$configuration"
+  dir="build/stability-$cxx${flags// /}${extra:+-pure}"
+  echo "== isin: stability and BVH tests, $cxx $flags $extra" >&2
+  cmake -S . -B "$dir" -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FLAGS="$flags" \
+    -DISIN_WERROR=ON -DISIN_BUILD_EXAMPLES=OFF $extra >/dev/null
+  cmake --build "$dir" -j"$jobs" --target test_stability test_bvh
+  ctest --test-dir "$dir" -R '^(test_stability|test_bvh)$' --output-on-failure
 done
 for preset in gcc clang sanitize tsan; do
   echo "== isin: $preset" >&2
@@ -25,6 +38,10 @@ for preset in gcc clang sanitize tsan; do
   cmake --build --preset "$preset" -j"$jobs"
   ctest --preset "$preset" -j"$jobs"
 done
+echo "== isin: benchmarks compile (not run)" >&2
+cmake -S . -B build/ci-benchmarks -DCMAKE_CXX_COMPILER=g++ -DCMAKE_BUILD_TYPE=Release -DISIN_WERROR=ON \
+  -DISIN_BUILD_BENCHMARKS=ON -DISIN_BUILD_TESTS=OFF -DISIN_BUILD_EXAMPLES=OFF >/dev/null
+cmake --build build/ci-benchmarks -j"$jobs"
 fuzz_seconds=${ISIN_FUZZ_SECONDS:-45}
 if [ "$fuzz_seconds" != 0 ]; then
   bash scripts/fuzz.sh "$fuzz_seconds"

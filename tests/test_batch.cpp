@@ -97,3 +97,36 @@ TEST_CASE_TEMPLATE("scene: batch and one-by-one triangle loops find the same hit
     }
     CHECK(differ == 0);
 }
+
+TEST_CASE_TEMPLATE("TriangleBatch::reserve adds no triangle and loses none, before or after push_back", T, float,
+                   double) {
+    // Triangle i lies across the +Z axis at z = 10 + i.
+    const auto across = [](int i) {
+        const T z = T(10 + i);
+        return isin::Triangle<T>{{-1, -1, z}, {1, -1, z}, {0, 1, z}};
+    };
+    const isin::Ray<T> ray{{0, 0, 0}, {0, 0, 1}};
+    isin::TriangleBatch<T> batch;
+    batch.reserve(100);
+    CHECK(batch.empty());
+    CHECK(batch.size() == 0);
+    CHECK_FALSE(batch.nearest(ray));
+    for (int i = 0; i < 3; ++i) batch.push_back(across(i));
+    batch.reserve(1);   // below the size
+    batch.reserve(200); // beyond what was reserved
+    REQUIRE(batch.size() == 3);
+    for (int i = 3; i < 40; ++i) batch.push_back(across(i)); // across block boundaries
+    REQUIRE(batch.size() == 40);
+    std::vector<std::size_t> seen;
+    int wrong_t = 0;
+    batch.each_hit(ray, T(100), [&](std::size_t i, T t) {
+        seen.push_back(i);
+        wrong_t += t != T(10) + T(i);
+        return true;
+    });
+    REQUIRE(seen.size() == 40);
+    for (std::size_t i = 0; i < seen.size(); ++i) CHECK(seen[i] == i);
+    CHECK(wrong_t == 0);
+    CHECK(batch.nearest(ray).primitive == 0);
+    CHECK(batch.nearest(ray).t == T(10));
+}

@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <limits>
 #include <new>
+#include <string>
 #include <random>
 #include <thread>
 #include <vector>
@@ -90,6 +91,28 @@ std::vector<isin::Triangle<T>> random_soup(int n, std::uint64_t seed) {
 }
 
 } // namespace
+
+TEST_CASE("Bvh: compiled to the path the build's flags ask for (CI builds each: pure, AVX without FMA, native)") {
+    const std::string slabs = isin::bvh_code_paths.slabs, leaf = isin::bvh_code_paths.leaf;
+    MESSAGE("Bvh code paths: node test ", slabs, ", triangle leaf ", leaf);
+#if defined(ISIN_FORCE_PURE)
+    CHECK(slabs == "portable");
+    CHECK(leaf == "portable");
+#elif defined(__GNUC__) || defined(__clang__)
+#if defined(__AVX__) && defined(__FMA__)
+    CHECK(slabs == "avx+fma");
+#elif defined(__AVX__)
+    CHECK(slabs == "avx");
+#else
+    CHECK(slabs == "vector extensions");
+#endif
+#if defined(__AVX2__) && defined(__FMA__)
+    CHECK(leaf == "avx2+fma");
+#else
+    CHECK(leaf == "vector extensions");
+#endif
+#endif
+}
 
 TEST_CASE_TEMPLATE("BVH: nearest hit and any-hit agree with the brute-force watertight loop", T, float, double) {
     for (int n : {1, 7, 8, 9, 100, 3000}) {
@@ -629,4 +652,171 @@ TEST_CASE_TEMPLATE("BvhTree with the caller's leaf: spheres found as brute force
     }
     CHECK(hits > 100);
     CHECK(differ == 0);
+}
+
+TEST_CASE_TEMPLATE("BvhTree: nodes and leaves hold each usable primitive once, inside every box above it", T, float,
+                   double) {
+    using Tree = isin::BvhTree<T>;
+    std::mt19937_64 rng(12);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    std::vector<isin::Box<T>> boxes(500);
+    for (auto& b : boxes) {
+        const isin::Vertex<T> c{T(uni(rng) * 50), T(uni(rng) * 50), T(uni(rng) * 50)};
+        const isin::Vertex<T> h{T(1 + uni(rng)), T(1 + uni(rng)), T(1 + uni(rng))};
+        b.grow(c - h), b.grow(c + h);
+    }
+    boxes[7] = isin::Box<T>{};                            // empty: left out
+    boxes[300].hi.y = std::numeric_limits<T>::infinity(); // not finite: left out
+    isin::Box<T> all;
+    T largest = T(0);
+    for (const auto& b : boxes)
+        if (b.usable()) all.grow(b), largest = std::max({largest, isin::max_abs(b.lo), isin::max_abs(b.hi)});
+    const auto holds = [](const isin::Vertex<T>& lo, const isin::Vertex<T>& hi, const isin::Box<T>& b) {
+        return lo.x <= b.lo.x && lo.y <= b.lo.y && lo.z <= b.lo.z && b.hi.x <= hi.x && b.hi.y <= hi.y && b.hi.z <= hi.z;
+    };
+    const auto child_box = [](const typename Tree::Node& n, int k) {
+        isin::Box<T> b;
+        b.lo = {n.lo[0][k], n.lo[1][k], n.lo[2][k]}, b.hi = {n.hi[0][k], n.hi[1][k], n.hi[2][k]};
+        return b;
+    };
+    for (int leaf_size : {1, 3, 8}) {
+        CAPTURE(leaf_size);
+        isin::BvhOptions options;
+        options.leaf_size = leaf_size;
+        const auto tree = isin::build_bvh<T>(boxes, options);
+        CHECK_FALSE(tree.empty());
+        CHECK(tree.size() == 498);
+        REQUIRE(tree.nodes().size() == tree.node_count());
+        REQUIRE(tree.leaves().size() == tree.leaf_count());
+        REQUIRE(tree.primitives().size() == tree.size());
+        CHECK(tree.bounds().lo == all.lo);
+        CHECK(tree.bounds().hi == all.hi);
+        CHECK(tree.bound() == largest);
+        // Leaves: 1…leaf_size primitives each, together every usable primitive once.
+        std::vector<int> seen(boxes.size());
+        int bad_counts = 0;
+        std::size_t held = 0;
+        for (const auto& leaf : tree.leaves()) {
+            bad_counts += leaf.count < 1 || leaf.count > std::uint32_t(leaf_size);
+            REQUIRE(std::size_t(leaf.first) + leaf.count <= tree.primitives().size());
+            held += leaf.count;
+            for (std::uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j) ++seen[tree.primitives()[j]];
+        }
+        CHECK(bad_counts == 0);
+        CHECK(held == tree.size());
+        int right_times = 0;
+        for (std::size_t i = 0; i < boxes.size(); ++i) right_times += seen[i] == (i == 7 || i == 300 ? 0 : 1);
+        CHECK(right_times == 500);
+        CHECK(tree.leaf_count() >= (tree.size() + std::size_t(leaf_size) - 1) / std::size_t(leaf_size));
+        if (leaf_size == 1) CHECK(tree.leaf_count() == tree.size());
+        // Nodes: the root is no node's child, every other node and every leaf is one slot's child,
+        // a child node comes after its parent, each child's box holds everything below it, and an
+        // empty slot has an empty box.
+        std::vector<int> node_refs(tree.node_count()), leaf_refs(tree.leaf_count());
+        int parent_after_child = 0, loose_boxes = 0, empty_slot_with_box = 0;
+        for (std::size_t p = 0; p < tree.node_count(); ++p) {
+            const auto& node = tree.nodes()[p];
+            for (int k = 0; k < 8; ++k) {
+                const std::uint32_t c = node.child[k];
+                const auto box = child_box(node, k);
+                if (c == Tree::empty_child) {
+                    empty_slot_with_box += !(box.lo.x > box.hi.x);
+                    continue;
+                }
+                if (c & Tree::leaf_bit) {
+                    const std::uint32_t leaf = c & ~Tree::leaf_bit;
+                    REQUIRE(leaf < tree.leaf_count());
+                    ++leaf_refs[leaf];
+                    const auto& l = tree.leaves()[leaf];
+                    for (std::uint32_t j = l.first; j < l.first + l.count; ++j)
+                        loose_boxes += !holds(box.lo, box.hi, boxes[tree.primitives()[j]]);
+                } else {
+                    REQUIRE(c < tree.node_count());
+                    ++node_refs[c];
+                    parent_after_child += c <= p;
+                    for (int m = 0; m < 8; ++m)
+                        if (tree.nodes()[c].child[m] != Tree::empty_child)
+                            loose_boxes += !holds(box.lo, box.hi, child_box(tree.nodes()[c], m));
+                }
+            }
+        }
+        CHECK(node_refs[0] == 0);
+        int wrong_refs = 0;
+        for (std::size_t i = 1; i < node_refs.size(); ++i) wrong_refs += node_refs[i] != 1;
+        for (const int refs : leaf_refs) wrong_refs += refs != 1;
+        CHECK(wrong_refs == 0);
+        CHECK(parent_after_child == 0);
+        CHECK(loose_boxes == 0);
+        CHECK(empty_slot_with_box == 0);
+    }
+    // No usable box: an empty tree.
+    const auto none = isin::build_bvh<T>(std::vector<isin::Box<T>>{isin::Box<T>{}, boxes[300]});
+    CHECK(none.empty());
+    CHECK(none.size() == 0);
+    CHECK(none.node_count() == 0);
+    CHECK(none.leaf_count() == 0);
+    CHECK(none.nodes().empty());
+    CHECK(none.leaves().empty());
+    CHECK(none.primitives().empty());
+    CHECK(none.depth() == 0);
+    CHECK(none.bounds().lo.x > none.bounds().hi.x);
+    CHECK(none.bound() == T(0));
+    // One box: one node, one leaf.
+    const auto one = isin::build_bvh<T>(std::vector<isin::Box<T>>{boxes[0]});
+    CHECK(one.node_count() == 1);
+    REQUIRE(one.leaf_count() == 1);
+    CHECK(one.leaves()[0].count == 1);
+    CHECK(one.primitives() == std::vector<std::uint32_t>{0});
+    CHECK(one.depth() == 1);
+    CHECK(one.bounds().lo == boxes[0].lo);
+    CHECK(one.bounds().hi == boxes[0].hi);
+}
+
+TEST_CASE_TEMPLATE("Bvh: one block per leaf holding that leaf's triangles; node and leaf counts are its tree's", T,
+                   float, double) {
+    auto tris = random_soup<T>(300, 9);
+    tris[10] = {{1, 1, 1}, {2, 2, 2}, {3, 3, 3}};        // zero area
+    tris[20].v1.x = std::numeric_limits<T>::quiet_NaN(); // not finite
+    const auto check_blocks = [&tris](const isin::Bvh<T>& bvh) {
+        CHECK(bvh.size() == 298);
+        CHECK(bvh.node_count() == bvh.tree().node_count());
+        CHECK(bvh.leaf_count() == bvh.tree().leaf_count());
+        CHECK(bvh.node_count() >= 1);
+        REQUIRE(bvh.blocks().size() == bvh.leaf_count());
+        int wrong = 0, left_out_present = 0, padding_not_lane_0 = 0;
+        for (std::size_t k = 0; k < bvh.leaf_count(); ++k) {
+            const auto& leaf = bvh.tree().leaves()[k];
+            const auto& block = bvh.blocks()[k];
+            for (std::uint32_t lane = 0; lane < 8; ++lane) {
+                if (lane >= leaf.count) { // padding repeats lane 0
+                    padding_not_lane_0 +=
+                        block.primitive[lane] != block.primitive[0] || block.v[2][1][lane] != block.v[2][1][0];
+                    continue;
+                }
+                const std::uint32_t i = bvh.tree().primitives()[leaf.first + lane];
+                wrong += block.primitive[lane] != i;
+                left_out_present += i == 10 || i == 20;
+                const isin::Vertex<T>* v[3] = {&tris[i].v0, &tris[i].v1, &tris[i].v2};
+                for (int corner = 0; corner < 3; ++corner)
+                    for (int axis = 0; axis < 3; ++axis)
+                        wrong += block.v[corner][axis][lane] != isin::component(*v[corner], axis);
+            }
+        }
+        CHECK(wrong == 0);
+        CHECK(left_out_present == 0);
+        CHECK(padding_not_lane_0 == 0);
+    };
+    isin::Bvh<T> bvh(tris);
+    check_blocks(bvh);
+    CHECK(bvh.leaf_count() >= (298 + 7) / 8);
+    isin::BvhOptions single;
+    single.leaf_size = 1;
+    const isin::Bvh<T> singles(tris, single);
+    check_blocks(singles);
+    CHECK(singles.leaf_count() == 298);
+    // After a refit the blocks hold the moved triangles (and what the build left out stays out,
+    // although the zero-area one has area now).
+    for (auto& tri : tris) tri.v0.z += T(0.5);
+    bvh.refit(tris);
+    check_blocks(bvh);
 }

@@ -6,6 +6,7 @@
 #include "approx.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 TEST_CASE_TEMPLATE("§3 ray: R(t) = Ro + t·Rd", T, float, double) {
@@ -148,4 +149,30 @@ TEST_CASE_TEMPLATE("§12 the note's pixel mapping is unchanged at rest and after
     CHECK(gd.x == approx(8));
     CHECK(gd.y == approx(-4.5));
     CHECK(gd.z == approx(10));
+}
+
+TEST_CASE_TEMPLATE("§12 heading: (sin yaw, 0, cos yaw), level whatever the pitch", T, float, double) {
+    const isin::Camera<T> rest{160, 90};
+    CHECK(rest.heading() == isin::Vertex<T>{0, 0, 1});
+    const isin::Camera<T> cam{160, 90, {1, 2, 3}, T(0.4), T(0.7)};
+    const auto h = cam.heading();
+    CHECK(h.x == approx(std::sin(0.4)));
+    CHECK(h.y == T(0));
+    CHECK(h.z == approx(std::cos(0.4)));
+    // The forward vector (sin yaw cos pitch, sin pitch, cos yaw cos pitch) without its pitch.
+    CHECK(h.x * std::cos(T(0.7)) == approx(cam.forward().x));
+    CHECK(h.z * std::cos(T(0.7)) == approx(cam.forward().z));
+    // Turning changes it: yaw −90° faces −X, yaw 180° faces −Z; pitch leaves it level.
+    isin::Camera<T> turning{160, 90};
+    turning.turn(T(-1.5707963267948966), T(0.5));
+    CHECK(turning.heading().x == approx(-1));
+    CHECK(turning.heading().y == T(0));
+    CHECK(turning.heading().z == approx(0).epsilon(1e-6));
+    turning.turn(T(-1.5707963267948966), T(-1));
+    CHECK(turning.heading().x == approx(0).epsilon(1e-6));
+    CHECK(turning.heading().z == approx(-1));
+    // A non-finite pose is ignored, and so the heading stays.
+    isin::Camera<T> kept{160, 90, {0, 0, 0}, T(0.4), T(0)};
+    kept.set_pose({0, 0, 0}, std::numeric_limits<T>::quiet_NaN(), T(0));
+    CHECK(kept.heading().x == approx(std::sin(0.4)));
 }

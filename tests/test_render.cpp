@@ -428,3 +428,31 @@ TEST_CASE("render: max_depth is bounded; at the bound two facing mirrors render 
                                       isin::RenderOptions::max_depth_limit + 1, opt, stats),
                     std::invalid_argument);
 }
+
+TEST_CASE("RenderStats: rays() adds the four kinds in 64 bits; mrays_per_second is rays / seconds / 10⁶, 0 untimed") {
+    isin::RenderStats stats;
+    CHECK(stats.rays() == 0);
+    CHECK(stats.mrays_per_second() == 0.0);
+    stats.primary = 3000000000u;
+    stats.shadow = 2000000000u;
+    stats.reflection = 700000000u;
+    stats.refraction = 300000000u;
+    CHECK(stats.rays() == 6000000000u);     // beyond 32 bits
+    CHECK(stats.mrays_per_second() == 0.0); // seconds = 0: no rate rather than ∞
+    stats.seconds = 2.5;
+    CHECK(stats.mrays_per_second() == doctest::Approx(2400));
+    stats.refraction = 0;
+    stats.seconds = 0.5;
+    CHECK(stats.rays() == 5700000000u);
+    CHECK(stats.mrays_per_second() == doctest::Approx(11400));
+    // A render's own stats: its rays over its wall time.
+    const auto scene = note_scene::make<float>();
+    isin::RenderOptions opt;
+    opt.progress = false;
+    isin::RenderStats measured;
+    (void)isin::render(scene, isin::Camera<float>{32, 18}, opt, &measured);
+    REQUIRE(measured.seconds > 0);
+    CHECK(measured.rays() == measured.primary + measured.shadow + measured.reflection + measured.refraction);
+    CHECK(measured.rays() > 32u * 18u);
+    CHECK(measured.mrays_per_second() == doctest::Approx(double(measured.rays()) / measured.seconds / 1e6));
+}

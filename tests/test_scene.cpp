@@ -7,6 +7,7 @@
 #include "approx.hpp"
 #include "common/workloads.hpp"
 
+#include <array>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -198,4 +199,100 @@ TEST_CASE("scene: a thousand placements of a mesh hold one mesh; twenty meshes c
         differ += bool(a) != bool(b) || (a && a.t != b.t);
     }
     CHECK(differ == 0);
+}
+
+TEST_CASE_TEMPLATE("scene: objects<Shape>() lists one kind's objects in the order added, as hits index them", T, float,
+                   double) {
+    isin::Scene<T, isin::Sphere, isin::Triangle, isin::TexturedTriangle> scene;
+    const auto red = scene.add_material({}), blue = scene.add_material({});
+    CHECK(scene.template objects<isin::Sphere<T>>().empty());
+    scene.add(isin::Sphere<T>{{0, 0, 50}, 5}, red);
+    scene.add(isin::Triangle<T>{{5, 0, 10}, {6, 0, 10}, {5, 1, 10}}, blue);
+    scene.add(isin::Sphere<T>{{0, 0, 30}, 2}, blue);
+    scene.add_textured_rectangle({10, 0, 20}, {14, 0, 20}, {10, 2, 20}, red);
+    const auto& spheres = scene.template objects<isin::Sphere<T>>();
+    REQUIRE(spheres.size() == 2);
+    CHECK(spheres[0].shape.center == isin::Vertex<T>{0, 0, 50});
+    CHECK(spheres[0].shape.radius == T(5));
+    CHECK(spheres[0].material == red);
+    CHECK(spheres[1].shape.center == isin::Vertex<T>{0, 0, 30});
+    CHECK(spheres[1].material == blue);
+    const auto& triangles = scene.template objects<isin::Triangle<T>>();
+    REQUIRE(triangles.size() == 1);
+    CHECK(triangles[0].shape.v2 == isin::Vertex<T>{5, 1, 10});
+    CHECK(triangles[0].material == blue);
+    // The rectangle's two right triangles (§10): V0 at the right angle of each, v3 = v1 + v2 − v0.
+    const auto& rectangle = scene.template objects<isin::TexturedTriangle<T>>();
+    REQUIRE(rectangle.size() == 2);
+    CHECK_FALSE(rectangle[0].shape.second);
+    CHECK(rectangle[0].shape.triangle.v0 == isin::Vertex<T>{10, 0, 20});
+    CHECK(rectangle[1].shape.second);
+    CHECK(rectangle[1].shape.triangle.v0 == isin::Vertex<T>{14, 2, 20});
+    CHECK(rectangle[1].material == red);
+    CHECK(scene.size() == 5);
+    // A hit names the kind (geometry) and the index into that kind's objects (primitive).
+    const auto hit = scene.intersect(isin::Ray<T>{{0, 0, 0}, {0, 0, 1}});
+    REQUIRE(hit);
+    CHECK(hit.geometry == 0);
+    REQUIRE(hit.primitive == 1);
+    CHECK(hit.t == approx(28));
+    CHECK(spheres[hit.primitive].shape.radius == T(2));
+}
+
+TEST_CASE_TEMPLATE("scene: mesh_count, mesh(id) and mesh_bvh(id): each mesh stored once, in its own space", T, float,
+                   double) {
+    isin::Scene<T, isin::Sphere> scene;
+    const auto m = scene.add_material({});
+    CHECK(scene.mesh_count() == 0);
+    auto ball = workloads::icosphere<T>({0, 0, 40}, 10.0, 1); // 80 triangles around (0, 0, 40)
+    ball.push_back({{1, 1, 1}, {2, 2, 2}, {3, 3, 3}});        // zero area: in the mesh, not in its Bvh
+    const auto a = scene.add_mesh(ball, m);
+    CHECK(scene.mesh_count() == 1);
+    const isin::Mesh<T>* stored = &scene.mesh(a);
+    CHECK(scene.mesh(a).size() == 81);
+    CHECK(scene.mesh(a).triangle(80).v2 == isin::Vertex<T>{3, 3, 3});
+    CHECK(scene.mesh_bvh(a).size() == 80);
+    // Placing it again stores no new mesh and moves nothing in it.
+    scene.add_instance(a, isin::Transform<T>::translation({100, 0, 0}));
+    scene.add_instance(a, isin::Transform<T>::translation({-100, 0, 0}));
+    CHECK(scene.mesh_count() == 1);
+    CHECK(scene.instance_count() == 3);
+    CHECK(&scene.mesh(a) == stored);
+    const auto box = scene.mesh_bvh(a).tree().bounds();
+    CHECK(box.lo.z == approx(30).epsilon(0.02)); // the mesh where it stands, not the placements
+    CHECK(box.hi.x == approx(10).epsilon(0.02));
+    const auto b = scene.add_mesh(std::vector<isin::Triangle<T>>{{{-1, -1, 5}, {0, 1, 5}, {1, -1, 5}}}, m);
+    CHECK(b.index == 1);
+    CHECK(scene.mesh_count() == 2);
+    CHECK(scene.instance_count() == 4);
+    CHECK(scene.mesh(b).size() == 1);
+    CHECK(scene.mesh_bvh(b).size() == 1);
+    scene.commit();
+    // A ray at the copy moved to x = 100: the scene hits it, the mesh's own Bvh (at x = 0) does not.
+    const isin::Ray<T> at_copy{{100, 0, 0}, {0, 0, 1}};
+    const auto hit = scene.intersect(at_copy);
+    REQUIRE(hit);
+    CHECK(hit.t == approx(30).epsilon(0.02));
+    CHECK_FALSE(scene.mesh_bvh(a).intersect(at_copy));
+    // Down the axis: each Bvh alone finds its own mesh; in the scene the triangle at z = 5 hides the ball.
+    const isin::Ray<T> axis{{0, 0, 0}, {0, 0, 1}};
+    CHECK(scene.mesh_bvh(a).intersect(axis).t == approx(30).epsilon(0.02));
+    CHECK(scene.mesh_bvh(b).intersect(axis).t == approx(5));
+    CHECK(scene.intersect(axis).t == approx(5));
+}
+
+TEST_CASE_TEMPLATE("§10 texture_coordinates: (u, v) on a rectangle's first triangle, (1−u, 1−v) on its second; other "
+                   "kinds have none",
+                   T, float, double) {
+    const isin::Triangle<T> tri{{0, 0, 10}, {4, 0, 10}, {0, 2, 10}};
+    const auto hit = isin::Hit<T>::at(T(10), T(0.25), T(0.5));
+    std::array<T, 2> st{T(-1), T(-1)};
+    CHECK(isin::texture_coordinates(isin::TexturedTriangle<T>{tri, false}, hit, st));
+    CHECK(st == std::array<T, 2>{T(0.25), T(0.5)});
+    CHECK(isin::texture_coordinates(isin::TexturedTriangle<T>{tri, true}, hit, st));
+    CHECK(st == std::array<T, 2>{T(0.75), T(0.5)});
+    st = {T(-1), T(-1)};
+    CHECK_FALSE(isin::texture_coordinates(tri, hit, st));
+    CHECK_FALSE(isin::texture_coordinates(isin::Sphere<T>{{0, 0, 10}, 1}, hit, st));
+    CHECK(st == std::array<T, 2>{T(-1), T(-1)}); // untouched
 }

@@ -6,6 +6,7 @@
 #include "approx.hpp"
 
 #include <cmath>
+#include <limits>
 
 TEST_CASE_TEMPLATE("§7 example 7a: L = (0,0.8,−0.6), coefficient 0.8, red (255,0,0) → (204,0,0)", T, float, double) {
     const isin::Vertex<T> light{0, 40, 0}, N{0, 1, 0}, P{0, 0, 30};
@@ -90,4 +91,29 @@ TEST_CASE_TEMPLATE("§8 refraction by Snell's law: n1 sin θ1 = n2 sin θ2, tota
     const T past = T(0.7), inside = T(0.66);
     CHECK_FALSE(isin::refract(isin::Vertex<T>{past, -std::sqrt(1 - past * past), 0}, n, T(1.5)));
     CHECK(isin::refract(isin::Vertex<T>{inside, -std::sqrt(1 - inside * inside), 0}, n, T(1.5)));
+}
+
+TEST_CASE_TEMPLATE("to_byte: [0,1] to 0…255 rounded to nearest; out of range clamps; NaN is 0", T, float, double) {
+    CHECK(isin::to_byte(T(0)) == 0);
+    CHECK(isin::to_byte(T(1)) == 255);
+    CHECK(isin::to_byte(T(0.5)) == 128); // 127.5 rounds up
+    CHECK(isin::to_byte(T(0.8)) == 204); // example 7a's red × 0.8
+    for (int i = 0; i <= 255; ++i) {
+        CAPTURE(i);
+        CHECK(int(isin::to_byte(T(i) / T(255))) == i); // every byte survives from_rgb8's / 255
+        CHECK(int(isin::to_byte((T(i) - T(0.45)) / T(255))) == (i > 0 ? i : 0));
+        CHECK(int(isin::to_byte((T(i) + T(0.45)) / T(255))) == i);
+        if (i < 255) CHECK(int(isin::to_byte((T(i) + T(0.55)) / T(255))) == i + 1);
+    }
+    CHECK(isin::to_byte(T(1) - std::numeric_limits<T>::epsilon()) == 255);
+    CHECK(isin::to_byte(std::numeric_limits<T>::denorm_min()) == 0);
+    const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
+    CHECK(isin::to_byte(T(-0.3)) == 0);
+    CHECK(isin::to_byte(-inf) == 0);
+    CHECK(isin::to_byte(T(1.7)) == 255);
+    CHECK(isin::to_byte(T(1e30)) == 255);
+    CHECK(isin::to_byte(inf) == 255);
+    CHECK(isin::to_byte(nan) == 0);
+    CHECK(isin::to_byte(-nan) == 0);
+    CHECK(isin::to_rgb8(isin::Color<T>{T(0.5), T(2), nan}) == isin::Rgb8{128, 255, 0});
 }

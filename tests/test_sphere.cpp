@@ -142,3 +142,73 @@ TEST_CASE_TEMPLATE("the comparison tests: textbook quadratic and Ray Tracing Gem
         CHECK(isin::intersect(grazing, small));
     }
 }
+
+TEST_CASE_TEMPLATE("§8 surface_band: 64ε·r·(r + |C|∞ + |Ro|∞), growing with the scene's scale as l2 − r2 does", T,
+                   float, double) {
+    constexpr T eps = std::numeric_limits<T>::epsilon();
+    const isin::Sphere<T> sp{{0, -50, 20}, 5};
+    CHECK(isin::surface_band(sp, isin::Vertex<T>{0, 0, 0}) == approx(T(64) * eps * T(5) * T(5 + 50)));
+    CHECK(isin::surface_band(sp, isin::Vertex<T>{-100, 30, 7}) == approx(T(64) * eps * T(5) * T(5 + 50 + 100)));
+    // The whole scene scaled by s: l2 − r2 scales by s², and so does the band (exactly for s = 2^±10).
+    const isin::Vertex<T> origin{3, 4, -12};
+    const T band = isin::surface_band(sp, origin);
+    for (T s : {T(1024), T(1) / T(1024)}) {
+        CAPTURE(s);
+        const isin::Sphere<T> scaled{sp.center * s, sp.radius * s};
+        CHECK(isin::surface_band(scaled, origin * s) == band * s * s);
+    }
+    // Unlike the note's fixed 0.001: a small fraction of r² at r = 1e-3 (where 0.001 is 1000 r²) …
+    const isin::Sphere<T> tiny{{0, 0, T(0.01)}, T(1e-3)};
+    CHECK(isin::surface_band(tiny, isin::Vertex<T>{0, 0, T(0.009)}) < T(1e-3) * tiny.radius * tiny.radius);
+    // … and above the rounding of l2 = |C − Ro|² = 1e8 at r = 1e4.
+    const isin::Sphere<T> huge{{0, 0, T(2e4)}, T(1e4)};
+    const T l2 = T(1e8), ulp = std::nextafter(l2, std::numeric_limits<T>::infinity()) - l2;
+    CHECK(isin::surface_band(huge, isin::Vertex<T>{0, 0, T(1e4)}) > T(16) * ulp);
+}
+
+TEST_CASE_TEMPLATE("§8 surface_band: points on the surface to rounding lie inside it, points 1024ε·(r + |C| + |P|) "
+                   "off do not, r = 1e-3…1e4",
+                   T, float, double) {
+    constexpr T eps = std::numeric_limits<T>::epsilon();
+    using L = long double;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (T r : {T(1e-3), T(1), T(1e4)}) {
+        CAPTURE(r);
+        const isin::Sphere<T> sp{{T(3) * r, T(-2) * r, T(10) * r}, r};
+        const T r2 = sp.radius * sp.radius;
+        const auto l2_minus_r2 = [&](const isin::Vertex<T>& P) { // as intersect computes it
+            const auto l = sp.center - P;
+            return isin::dot(l, l) - r2;
+        };
+        // The point at distance `radius` from the centre along unit n, rounded once to T.
+        const auto at = [&](const isin::Vertex<L>& n, L radius) {
+            return isin::Vertex<T>{T(L(sp.center.x) + radius * n.x), T(L(sp.center.y) + radius * n.y),
+                                   T(L(sp.center.z) + radius * n.z)};
+        };
+        int hits = 0, hits_outside = 0, surface_outside = 0, off_inside = 0;
+        for (int i = 0; i < 1000; ++i) {
+            // A hit point, where a secondary ray starts.
+            const isin::Vertex<T> aim{sp.center.x + T(uni(rng)) * r, sp.center.y + T(uni(rng)) * r, sp.center.z};
+            const isin::Ray<T> ray{{0, 0, 0}, isin::normalize(aim)};
+            if (const auto hit = isin::intersect(ray, sp)) {
+                ++hits;
+                const auto P = ray.at(hit.t);
+                hits_outside += !(std::fabs(l2_minus_r2(P)) <= isin::surface_band(sp, P));
+            }
+            // A point of the surface rounded to T, and points δ off it along the same normal.
+            const auto n = isin::normalize(isin::Vertex<L>{L(uni(rng)), L(uni(rng)), L(uni(rng))});
+            const auto Q = at(n, L(r));
+            surface_outside += !(std::fabs(l2_minus_r2(Q)) <= isin::surface_band(sp, Q));
+            const L delta = L(1024) * L(eps) * (L(r) + L(isin::max_abs(sp.center)) + L(isin::max_abs(Q)));
+            for (L side : {L(1), L(-1)}) {
+                const auto off = at(n, L(r) + side * delta);
+                off_inside += std::fabs(l2_minus_r2(off)) <= isin::surface_band(sp, off);
+            }
+        }
+        CHECK(hits > 500);
+        CHECK(hits_outside == 0);
+        CHECK(surface_outside == 0);
+        CHECK(off_inside == 0);
+    }
+}

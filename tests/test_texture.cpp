@@ -150,3 +150,28 @@ TEST_CASE_TEMPLATE("ImageTexture::load reads a file; a missing file throws namin
     }
     CHECK(message.find(missing) != std::string::npos);
 }
+
+TEST_CASE_TEMPLATE("Checkerboard: height counts rows, at least one; square's parity holds for any int i, j", T, float,
+                   double) {
+    const isin::Color<T> a{1, 0, 0}, b{0, 0, 1};
+    CHECK(isin::Checkerboard<T>{a, b, 3, 5}.height() == T(5));
+    CHECK(isin::Checkerboard<T>{a, b, 3, 0}.height() == T(1));
+    CHECK(isin::Checkerboard<T>{a, b, -4, -7}.width() == T(1));
+    CHECK(isin::Checkerboard<T>{a, b, -4, -7}.height() == T(1));
+    const isin::Checkerboard<T> board{a, b, 3, 5};
+    CHECK(board.square(-3, 1) == a);  // i + j = −2
+    CHECK(board.square(-3, -4) == b); // −7
+    CHECK(board.square(2, -5) == b);  // −3
+    // i + j would overflow an int here (undefined; the sanitizer build would report it): the colour
+    // still follows the parity of the true sum.
+    constexpr int big = std::numeric_limits<int>::max(), small = std::numeric_limits<int>::min();
+    CHECK(board.square(big, 1) == a);     // 2^31 is even
+    CHECK(board.square(big, big) == a);   // 2^32 − 2
+    CHECK(board.square(small, 0) == a);   // −2^31
+    CHECK(board.square(small, big) == b); // −1
+    CHECK(board.square(small, -1) == b);  // −2^31 − 1
+    CHECK(board.square(small, small) == a);
+    // 3 × 5 squares: t = 0.5 is row 2; s = 0.1 is column 0 (2 + 0 even: a), s = 0.5 column 1 (odd: b).
+    CHECK(board.sample(T(0.1), T(0.5), isin::Filter::nearest) == a);
+    CHECK(board.sample(T(0.5), T(0.5), isin::Filter::nearest) == b);
+}

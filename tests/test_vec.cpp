@@ -92,3 +92,86 @@ TEST_CASE("§2 the vector algebra is usable in constant expressions") {
     static_assert(isin::reflect(isin::Vec3d{0, -1, 0}, isin::Vec3d{0, 1, 0}) == isin::Vec3d{0, 1, 0});
     CHECK(true);
 }
+
+namespace {
+
+/// a·b − c·d = 1 exactly, with c·d just above a half-ulp point: rounded alone it becomes larger
+/// than a·b (found by search; every factor and product is an integer, exact in T's significand).
+template <class T>
+struct CancellingProducts;
+template <>
+struct CancellingProducts<float> {
+    static constexpr float a = 11013, b = 13724, c = 12289, d = 12299; // a·b = 151142412 (ulp 8)
+};
+template <>
+struct CancellingProducts<double> {
+    static constexpr double a = 201313046, b = 201341453, c = 201327891, d = 201326607; // ulp 8
+};
+
+/// x rounded to T and stored, so that the compiler cannot fuse it into a later addition.
+template <class T>
+T stored(T x) {
+    volatile T v = x;
+    return v;
+}
+
+} // namespace
+
+TEST_CASE_TEMPLATE("difference_of_products: a·b − c·d on ordinary values", T, float, double) {
+    CHECK(isin::difference_of_products(T(3), T(4), T(2), T(5)) == T(2));
+    CHECK(isin::difference_of_products(T(2), T(5), T(3), T(4)) == T(-2));
+    CHECK(isin::difference_of_products(T(-3), T(4), T(2), T(-5)) == T(-2));
+    CHECK(isin::difference_of_products(T(1.5), T(-2), T(0), T(7)) == T(-3));
+    CHECK(isin::difference_of_products(T(0.1), T(0.3), T(0.2), T(0.7)) == approx(0.03 - 0.14));
+    // §2 example 2b: z of E1 × E2 = 30·(−80) − (−80)·(−30) = −4800.
+    CHECK(isin::difference_of_products(T(30), T(-80), T(-80), T(-30)) == T(-4800));
+}
+
+TEST_CASE_TEMPLATE("difference_of_products: exact sign where a fused or a plain a·b − c·d gets it wrong", T, float,
+                   double) {
+    using P = CancellingProducts<T>;
+    const T a = P::a, b = P::b, c = P::c, d = P::d;
+    // The traps: a compiler that fuses a·b − c·d into fma(a, b, −round(c·d)) gets −2 or −4 (wrong
+    // sign); one that rounds both products gets 0 or −4 (the difference cancelled away).
+    REQUIRE(std::fma(a, b, -stored(c * d)) < T(0));
+    REQUIRE(stored(a * b) - stored(c * d) <= T(0));
+    CHECK(isin::difference_of_products(a, b, c, d) == T(1));
+    CHECK(isin::difference_of_products(c, d, a, b) == T(-1));
+    CHECK(isin::difference_of_products(b, a, d, c) == T(1));
+    // Equal products: exactly 0, where a fused form leaves the rounding error of a·a.
+    const T x = T(1) + std::ldexp(T(1), -(std::numeric_limits<T>::digits / 2 + 1));
+    REQUIRE(std::fma(x, x, -stored(x * x)) != T(0));
+    CHECK(isin::difference_of_products(x, x, x, x) == T(0));
+    // 1 + 2^-k squared minus (1 + 2^-(k-1)): the 2^-2k that rounding a·b alone would lose.
+    const T h = x - T(1);
+    CHECK(isin::difference_of_products(x, x, T(1) + T(2) * h, T(1)) == h * h);
+}
+
+TEST_CASE_TEMPLATE("max_of: the larger of two values; a NaN in either is the result", T, float, double) {
+    CHECK(isin::max_of(T(2), T(3)) == T(3));
+    CHECK(isin::max_of(T(3), T(2)) == T(3));
+    CHECK(isin::max_of(T(-1), T(-5)) == T(-1));
+    CHECK(isin::max_of(T(-7), T(-7)) == T(-7));
+    const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
+    CHECK(isin::max_of(T(1), inf) == inf);
+    CHECK(isin::max_of(-inf, T(1)) == T(1));
+    CHECK(std::isnan(isin::max_of(T(4), nan)));
+    CHECK(std::isnan(isin::max_of(nan, T(4))));
+    CHECK(std::isnan(isin::max_of(nan, -inf)));
+    static_assert(isin::max_of(T(1), T(2)) == T(2), "constexpr");
+}
+
+TEST_CASE_TEMPLATE("max_abs: the largest |component|, whichever component holds it", T, float, double) {
+    CHECK(isin::max_abs(isin::Vertex<T>{-7, 3, 5}) == T(7));
+    CHECK(isin::max_abs(isin::Vertex<T>{1, -2, T(0.5)}) == T(2));
+    CHECK(isin::max_abs(isin::Vertex<T>{0, 0, -9}) == T(9));
+    CHECK(isin::max_abs(isin::Vertex<T>{0, 0, 0}) == T(0));
+    CHECK(isin::max_abs(isin::Vertex<T>{T(-0.0), 0, 0}) == T(0));
+    const T inf = std::numeric_limits<T>::infinity();
+    CHECK(isin::max_abs(isin::Vertex<T>{1, -inf, 2}) == inf);
+    const T nan = std::numeric_limits<T>::quiet_NaN(); // NaN wherever it is: the magnitude is unknown
+    CHECK(std::isnan(isin::max_abs(isin::Vertex<T>{nan, 1, 2})));
+    CHECK(std::isnan(isin::max_abs(isin::Vertex<T>{1, nan, 2})));
+    CHECK(std::isnan(isin::max_abs(isin::Vertex<T>{1, 2, nan})));
+    CHECK(isin::max_abs(isin::Vertex<T>{T(1e30), T(-1e-30), T(3)}) == T(1e30));
+}

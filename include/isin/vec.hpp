@@ -139,14 +139,16 @@ template <class T>
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
 
-/// The larger of a and b; a plain comparison (std::fmax is a library call on x86). NaN in b
-/// yields a, NaN in a yields b — callers only use it for magnitudes that feed NaN-rejecting tests.
+/// The larger of a and b by plain comparisons (std::fmax is a library call on x86, and drops
+/// NaN): a NaN in either is the result, so a magnitude built from a NaN stays NaN and the
+/// NaN-rejecting tests that use it reject.
 template <class T>
 [[nodiscard]] constexpr T max_of(T a, T b) noexcept {
-    return a < b ? b : a;
+    return a < b || b != b ? b : a; // b != b: b is NaN
 }
 
-/// Largest absolute component (the max norm), a cheap magnitude for scale-relative tolerances.
+/// Largest absolute component (the max norm), a cheap magnitude for scale-relative tolerances;
+/// NaN if any component is NaN.
 template <class T>
 [[nodiscard]] inline T max_abs(const Vertex<T>& a) noexcept {
     return max_of(std::fabs(a.x), max_of(std::fabs(a.y), std::fabs(a.z)));

@@ -17,6 +17,33 @@
 
 namespace isin {
 
+/// Which form of its code the Bvh was compiled to for float rays (a build's flags choose, and
+/// ISIN_FORCE_PURE turns every vector form off): the node test ("avx+fma", "avx", "vector
+/// extensions" or "portable") and the triangle leaf ("avx2+fma", "vector extensions" or
+/// "portable"). For logs and tests that a build takes the path it was meant to.
+struct BvhCodePaths {
+    const char* slabs;
+    const char* leaf;
+};
+inline constexpr BvhCodePaths bvh_code_paths {
+#if defined(ISIN_DETAIL_SLABS_AVX) && defined(__FMA__)
+    "avx+fma",
+#elif defined(ISIN_DETAIL_SLABS_AVX)
+    "avx",
+#elif ISIN_VECTOR_EXTENSIONS
+    "vector extensions",
+#else
+    "portable",
+#endif
+#if defined(ISIN_DETAIL_TRIANGLES_AVX2)
+        "avx2+fma",
+#elif ISIN_VECTOR_EXTENSIONS
+        "vector extensions",
+#else
+        "portable",
+#endif
+};
+
 /// Which hits of a triangle Bvh count, beyond t in (0, t_max).
 struct HitFilter {
     /// Front faces only: clockwise seen from the ray's origin (§2), i.e. §11 method 1 with the
