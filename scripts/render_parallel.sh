@@ -5,8 +5,8 @@
 # one frame: PROGRAM ARGS [--frames F..F] --tile I/N --output DIR/piece_F_I.ppm, for any PROGRAM
 # that takes --tile, --frames and --output (examples notes_scene, mesh_view, walk --script).
 #
-#   scripts/render_parallel.sh [--tiles N] [--frames A..B] [--sshlogin LOGINS] [--jobs J]
-#                              [--merge PATH] --output OUT -- PROGRAM [ARGS...]
+#   scripts/render_parallel.sh [--tiles N] [--frames A..B] [--sshlogin LOGINS [--shared-fs]]
+#                              [--jobs J] [--merge PATH] --output OUT -- PROGRAM [ARGS...]
 #
 #   --tiles N        bands of rows per picture (default 8)
 #   --frames A..B    frames A to B of PROGRAM's camera path; OUT must then hold a %d or %0Nd
@@ -16,19 +16,23 @@
 #                    ARGS name must exist at the same paths on every machine (a shared file
 #                    system, or GNU parallel's --basefile given through the PARALLEL environment
 #                    variable); relative paths are relative to the home directory there. Pieces
-#                    come back by rsync (--return) and are removed there (--cleanup).
+#                    are written under $TMPDIR (or /tmp) there, come back by rsync (--return)
+#                    and are removed there (--cleanup).
+#   --shared-fs      the machines share this directory's file system: pieces are written to a
+#                    temporary directory in it, and nothing is copied
 #   --jobs J         pieces at once per machine (default: its cores); unless ARGS set --threads,
 #                    each piece runs on one thread
 #   --merge PATH     merge_tiles to use (default: next to PROGRAM, else on PATH)
 #   --output OUT     the picture (or frame pattern), .png or .ppm
 set -euo pipefail
-usage() { sed -n '8,25p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 2; }
-tiles=8 frames="" sshlogin="" jobs="" merge="" output=""
+usage() { sed -n '8,26p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 2; }
+tiles=8 frames="" sshlogin="" shared=0 jobs="" merge="" output=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --tiles) tiles=${2:?--tiles needs a value}; shift 2 ;;
     --frames) frames=${2:?--frames needs a value}; shift 2 ;;
     --sshlogin|-S) sshlogin=${2:?--sshlogin needs a value}; shift 2 ;;
+    --shared-fs) shared=1; shift ;;
     --jobs|-j) jobs=${2:?--jobs needs a value}; shift 2 ;;
     --merge) merge=${2:?--merge needs a value}; shift 2 ;;
     --output|-o) output=${2:?--output needs a value}; shift 2 ;;
@@ -59,7 +63,9 @@ fi
 args=("$@")
 [[ " ${args[*]} " == *" --threads "* ]] || args+=(--threads 1)
 
-pieces=$(mktemp -d "${TMPDIR:-/tmp}/isin-pieces.XXXXXX")
+if [ "$shared" = 1 ]; then pieces=$(mktemp -d "$PWD/.isin-pieces.XXXXXX")
+else pieces=$(mktemp -d "${TMPDIR:-/tmp}/isin-pieces.XXXXXX")
+fi
 trap 'rm -rf "$pieces"' EXIT
 # One piece: {1} the frame ('-' for a still), {2} the band; it writes $pieces/tile{2}_frame{1}.ppm
 # (with --frames the program puts the frame number into the %d itself).
@@ -70,7 +76,10 @@ q_pieces=$(printf '%q' "$pieces")
 command_line="mkdir -p $q_pieces && $(printf '%q ' "$program" "${args[@]}") $frame_option --tile {2}/$tiles --output $q_pieces/$name"
 options=(--halt now,fail=1 --wd .)
 [ -n "$jobs" ] && options+=(-j "$jobs")
-[ -n "$sshlogin" ] && options+=(--sshlogin "$sshlogin" --return "$pieces/tile{2}_frame{1}.ppm" --cleanup)
+if [ -n "$sshlogin" ]; then
+  options+=(--sshlogin "$sshlogin")
+  [ "$shared" = 1 ] || options+=(--return "$pieces/tile{2}_frame{1}.ppm" --cleanup)
+fi
 start=$(date +%s%N)
 parallel "${options[@]}" "$command_line" ::: $frame_list ::: $(seq 0 $((tiles - 1))) >/dev/null ||
   { echo "render_parallel: a piece failed (its message is above)" >&2; exit 1; }

@@ -47,7 +47,7 @@ parallel) # the script, as a scheduler would run it (here: this machine)
   "$bin/notes_scene" --width 160 --height 90 --frames 0..2 --output whole%d.png
   bash "$script" --tiles 4 --frames 0..2 --output pieces%d.png -- "$bin/notes_scene" --width 160 --height 90
   for f in 0 1 2; do same whole$f.png pieces$f.png; done
-  bash "$script" --tiles 3 --sshlogin 2/: --output still.png -- "$bin/notes_scene" --width 160 --height 90
+  bash "$script" --tiles 3 --sshlogin 2/: --shared-fs --output still.png -- "$bin/notes_scene" --width 160 --height 90
   same whole0.png still.png ;;
 *) echo "unknown case '$3'" >&2; exit 2 ;;
 esac

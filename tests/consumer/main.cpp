@@ -3,6 +3,7 @@
 #include <isin/isin.hpp>
 
 #include <cstdio>
+#include <vector>
 
 int main(int argc, char** argv) {
     const isin::Camera<float> cam{32, 18};
@@ -24,9 +25,12 @@ int main(int argc, char** argv) {
     for (const auto& p : image.pixels()) red_pixels += p.r > 0 && p.g == 0 && p.b == 0;
     std::printf("centre pixel (%d, %d, %d), %d red pixels\n", centre.r, centre.g, centre.b, red_pixels);
     const bool sphere = centre.r > 0 && centre.r == centre.g && centre.g == centre.b;
+    // A Bvh of its own: its builder comes from isin::io / isin-io (ISIN_COMPILED_BVH) or is compiled here.
+    const isin::Bvh<float> bvh(std::vector<isin::Triangle<float>>{blue});
+    const bool bvh_hit = bvh.intersect(cam.primary_ray(15.5f, 8.5f)).primitive == 0;
     if (argc > 1) { // the file code: write and read back
         isin::write_image(image, argv[1]);
         if (isin::read_image(argv[1]).pixels() != image.pixels()) return 1;
     }
-    return hit && hit.t > 76.9f && hit.t < 77.1f && sphere && red_pixels > 20 ? 0 : 1;
+    return hit && hit.t > 76.9f && hit.t < 77.1f && sphere && red_pixels > 20 && bvh_hit ? 0 : 1;
 }

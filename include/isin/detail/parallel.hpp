@@ -9,10 +9,32 @@
 #include <cstddef>
 #include <exception>
 #include <thread>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 namespace isin::detail {
+
+/// A callable passed by reference, its type erased (a pointer to it and to a function that calls
+/// it): so that run_workers, parallel_chunks and fork_join are compiled once, not once for
+/// every lambda handed to them — each copy of std::thread's machinery costs compile time in
+/// every file that renders or builds a Bvh. The callable must outlive the call.
+template <class Signature>
+class FunctionRef;
+template <class R, class... Args>
+class FunctionRef<R(Args...)> {
+public:
+    template <class F, class = std::enable_if_t<!std::is_same_v<std::decay_t<F>, FunctionRef>>>
+    FunctionRef(F&& f) noexcept // implicit: a lambda converts where a FunctionRef is expected
+        : object_(const_cast<void*>(static_cast<const void*>(&f))), call_([](void* object, Args... args) -> R {
+              return (*static_cast<std::remove_reference_t<F>*>(object))(std::forward<Args>(args)...);
+          }) {}
+    R operator()(Args... args) const { return call_(object_, std::forward<Args>(args)...); }
+
+private:
+    void* object_;
+    R (*call_)(void*, Args...);
+};
 
 /// The first exception of several workers, and a flag the others can poll to stop early.
 class FirstError {
@@ -44,12 +66,11 @@ private:
 /// on new threads, as many as can be started. Bodies must share their work out dynamically (e.g.
 /// from an atomic counter), since fewer of them may run, and may poll error.failed() to stop
 /// early. Joins every started thread, then rethrows the first exception of any body.
-template <class Body>
-void run_workers(int count, Body&& body) {
+inline void run_workers(int count, FunctionRef<void(int, const FirstError&)> body) {
     FirstError error;
     const auto guarded = [&](int worker) noexcept {
         try {
-            body(worker, static_cast<const FirstError&>(error));
+            body(worker, error);
         } catch (...) {
             error.capture();
         }
@@ -67,8 +88,8 @@ void run_workers(int count, Body&& body) {
 
 /// Calls f(begin, end) over [0, n) in chunks of at least `min_chunk` items, on up to `threads`
 /// threads (run_workers: chunks are taken from a shared counter, exceptions reach the caller).
-template <class F>
-void parallel_chunks(std::size_t n, int threads, std::size_t min_chunk, const F& f) {
+inline void parallel_chunks(std::size_t n, int threads, std::size_t min_chunk,
+                            FunctionRef<void(std::size_t, std::size_t)> f) {
     const std::size_t parts =
         std::max<std::size_t>(1, std::min(std::size_t(std::max(threads, 1)), n / std::max<std::size_t>(min_chunk, 1)));
     const std::size_t chunk = (n + parts - 1) / parts;
@@ -81,8 +102,7 @@ void parallel_chunks(std::size_t n, int threads, std::size_t min_chunk, const F&
 
 /// Runs a() on a new thread and b() on this one, then rethrows the first exception of either
 /// once both have finished. When no thread can be started, a() runs here after b().
-template <class A, class B>
-void fork_join(A&& a, B&& b) {
+inline void fork_join(FunctionRef<void()> a, FunctionRef<void()> b) {
     FirstError error;
     std::thread worker;
     try {
