@@ -36,15 +36,16 @@ for name in isin.hpp notes_scene mesh_view io; do
     done
   done
 done
-# Precompiled: g++ takes include/isin/isin.hpp.gch's twin from the first include directory.
-mkdir -p "$work/pch/isin"
+# Precompiled as CMake's target_precompile_headers does it: a header that includes isin.hpp,
+# compiled once, force-included into each file.
+printf '#include <isin/isin.hpp>\n' > "$work/isin_pch.hpp"
 for opt in -O0 -O2; do
-  g++ -std=c++17 $opt -DISIN_COMPILED_BVH -I include -x c++-header include/isin/isin.hpp -o "$work/pch/isin/isin.hpp.gch" 2>/dev/null
+  g++ -std=c++17 $opt -DISIN_COMPILED_BVH -I include -x c++-header "$work/isin_pch.hpp" -o "$work/isin_pch.hpp.gch"
   for name in isin.hpp notes_scene; do
     src=${sources[$name]}
     times=()
     for ((r = 0; r < runs; ++r)); do
-      times+=("$( { /usr/bin/time -f '%e' g++ -std=c++17 $opt -DISIN_COMPILED_BVH -Winvalid-pch -I "$work/pch" -I include -include isin/isin.hpp -c "$src" -o "$work/out.o"; } 2>&1 | tail -1)")
+      times+=("$( { /usr/bin/time -f '%e' g++ -std=c++17 $opt -DISIN_COMPILED_BVH -Winvalid-pch -I include -include "$work/isin_pch.hpp" -c "$src" -o "$work/out.o"; } 2>&1 | tail -1)")
     done
     printf '%-12s %-8s %-4s %9s %9s %10s\n' "$name" "g++ pch" "$opt" "$(printf '%s\n' "${times[@]}" | median)" - -
   done
