@@ -2,6 +2,7 @@
 // I/K look up and down, P saves the view as PNG, Q quits. 24-bit colour, two pixels per
 // character cell (upper half block), sized to the terminal; a coarse frame first while moving,
 // full resolution when the camera stops. Headless: --script KEYS replays keys and writes PNGs.
+// The camera is the note's (§3: eye, plane 9 high at distance 10) with square pixels at any size.
 // Build: c++ -std=c++17 -O2 -DISIN_IMPLEMENTATION -I include examples/walk.cpp -o walk
 #include <algorithm>
 #include <atomic>
@@ -67,9 +68,17 @@ bool apply_key(char key, isin::Camera<float>& cam) {
     // clang-format on
 }
 
-// The same pose at another resolution (the plane stays the note's 16×9 at distance 10).
+// The note's camera (§3: its plane 9 high at distance 10) with square pixels at any size: a
+// terminal's cells or a script's --width × --height are not 16:9.
+isin::Camera<float> walking_camera(int w, int h, const isin::Vec3f& position = {}, float yaw = 0, float pitch = 0) {
+    isin::Camera<float> cam{w, h, position, yaw, pitch};
+    cam.square_pixels();
+    return cam;
+}
+
+// The same pose at another resolution.
 isin::Camera<float> resized(const isin::Camera<float>& cam, int w, int h) {
-    return isin::Camera<float>{w, h, cam.position(), cam.yaw(), cam.pitch()};
+    return walking_camera(w, h, cam.position(), cam.yaw(), cam.pitch());
 }
 
 void print_pose(const isin::Camera<float>& cam) {
@@ -172,7 +181,7 @@ int interactive(const note_scene::Scene<float>& scene, isin::RenderOptions opt) 
     if (ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) != 0 || ws.ws_col < 8 || ws.ws_row < 4) ws.ws_col = 80, ws.ws_row = 24;
     const int width = std::min(int(ws.ws_col), 1000), height = 2 * std::min(int(ws.ws_row) - 1, 500);
     enter_raw_mode();
-    isin::Camera<float> cam{width, height};
+    isin::Camera<float> cam = walking_camera(width, height);
     int saved = 0;
     bool moving = false, dirty = true;
     std::string note;
@@ -258,7 +267,7 @@ int main(int argc, char** argv) {
         if (!frames_value.empty() || !tile_text.empty()) fail("--frames and --tile go with --script");
     }
     // The scripted walk: frame 0 is the start, frame k the pose after the k-th key that moves.
-    isin::Camera<float> start{width ? width : (benchmark ? 160 : 320), height ? height : 180};
+    isin::Camera<float> start = walking_camera(width ? width : (benchmark ? 160 : 320), height ? height : 180);
     std::vector<isin::Camera<float>> poses{start};
     for (const char k : script)
         if (apply_key(k, start)) poses.push_back(start);

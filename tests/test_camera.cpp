@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 TEST_CASE_TEMPLATE("§3 ray: R(t) = Ro + t·Rd", T, float, double) {
     const isin::Ray<T> ray{{1, 2, 3}, {0, T(0.6), T(0.8)}};
@@ -175,4 +176,78 @@ TEST_CASE_TEMPLATE("§12 heading: (sin yaw, 0, cos yaw), level whatever the pitc
     isin::Camera<T> kept{160, 90, {0, 0, 0}, T(0.4), T(0)};
     kept.set_pose({0, 0, 0}, std::numeric_limits<T>::quiet_NaN(), T(0));
     CHECK(kept.heading().x == approx(std::sin(0.4)));
+}
+
+namespace {
+/// Distance between the plane points of two pixels.
+template <class T>
+T spacing(const isin::Camera<T>& cam, T x0, T y0, T x1, T y1) {
+    return isin::length(cam.image_point(x1, y1) - cam.image_point(x0, y0));
+}
+} // namespace
+
+TEST_CASE_TEMPLATE("look_at with up and field of view: square pixels at any size, the note's plane otherwise", T, float,
+                   double) {
+    for (const auto& size : {std::pair{300, 600}, std::pair{400, 400}, std::pair{1920, 1080}, std::pair{7, 2}}) {
+        const int w = size.first;
+        const int h = size.second;
+        CAPTURE(w);
+        CAPTURE(h);
+        const auto cam = isin::Camera<T>::look_at(w, h, {1, 2, -30}, {0, 0, 0}, {0, 1, 0}, T(40));
+        const T across = spacing(cam, T(0), T(0), T(w - 1), T(0)) / T(w - 1);
+        const T down = spacing(cam, T(0), T(0), T(0), T(h - 1)) / T(h - 1);
+        CHECK(across == approx(down)); // square pixels
+        CHECK(cam.vertical_fov() == approx(40));
+        // The top and bottom row centres subtend the field of view at the eye.
+        const auto top = isin::normalize(cam.image_point(T(w - 1) / 2, T(0)) - cam.position());
+        const auto bottom = isin::normalize(cam.image_point(T(w - 1) / 2, T(h - 1)) - cam.position());
+        CHECK(std::acos(isin::dot(top, bottom)) * T(180) / T(3.141592653589793) == approx(40).epsilon(1e-4));
+        // The centre ray goes to the target.
+        const auto centre = cam.primary_ray(T(w - 1) / 2, T(h - 1) / 2).direction;
+        const auto to_target = isin::normalize(isin::Vertex<T>{0, 0, 0} - cam.position());
+        CHECK(isin::dot(centre, to_target) == approx(1));
+    }
+    // The note's camera keeps its 16×9 plane: its pixels are square only at 16:9.
+    const isin::Camera<T> note{300, 600};
+    CHECK(note.plane_width == T(16));
+    CHECK(note.plane_height == T(9));
+    CHECK(spacing(note, T(0), T(0), T(299), T(0)) / T(299) > T(3) * spacing(note, T(0), T(0), T(0), T(599)) / T(599));
+    // square_pixels keeps the height; the note's camera then sees 2·atan(0.45) vertically.
+    isin::Camera<T> squared{300, 600};
+    squared.square_pixels();
+    CHECK(squared.plane_height == T(9));
+    CHECK(squared.plane_width == approx(T(9) * T(299) / T(599)));
+    CHECK(squared.vertical_fov() == approx(2 * std::atan(0.45) * 180 / 3.141592653589793));
+}
+
+TEST_CASE_TEMPLATE("look_at's up vector rolls the image; a useless up keeps it level; bad fields of view throw", T,
+                   float, double) {
+    // Looking along +Z with up = +X: the image's top is towards +X, its right towards −Y.
+    const auto cam = isin::Camera<T>::look_at(101, 101, {0, 0, 0}, {0, 0, 10}, {1, 0, 0}, T(60));
+    CHECK(cam.up().x == approx(1));
+    CHECK(cam.right().y == approx(-1));
+    CHECK(cam.roll() == approx(3.141592653589793 / 2));
+    const auto top = cam.image_point(T(50), T(0)), centre = cam.image_point(T(50), T(50));
+    CHECK(top.x - centre.x > T(1));
+    // The right-handedness of the image stays: right × up = forward (left-handed frame, §2).
+    const auto f = isin::cross(cam.right(), cam.up());
+    CHECK(f.z == approx(1));
+    // An up with a part along the view: only its part across counts.
+    const auto tilted = isin::Camera<T>::look_at(101, 101, {0, 0, 0}, {0, 0, 10}, {0, 1, 5}, T(60));
+    CHECK(tilted.up().y == approx(1));
+    CHECK(tilted.roll() == approx(0).epsilon(1e-6));
+    // Up along the view, zero or NaN: level, as look_at without up.
+    for (const isin::Vertex<T> up : {isin::Vertex<T>{0, 0, 3}, isin::Vertex<T>{0, 0, 0},
+                                     isin::Vertex<T>{std::numeric_limits<T>::quiet_NaN(), 1, 0}}) {
+        const auto level = isin::Camera<T>::look_at(101, 101, {0, 0, 0}, {0, 0, 10}, up, T(60));
+        CHECK(level.roll() == T(0));
+        CHECK(level.up().y == approx(1));
+    }
+    // Walking keeps the roll.
+    auto walker = cam;
+    walker.turn(T(0.1));
+    CHECK(walker.roll() == approx(3.141592653589793 / 2));
+    for (const T bad : {T(0), T(180), T(-5), T(400), std::numeric_limits<T>::quiet_NaN()})
+        CHECK_THROWS_AS((void)isin::Camera<T>::look_at(10, 10, {0, 0, 0}, {0, 0, 1}, {0, 1, 0}, bad),
+                        std::invalid_argument);
 }

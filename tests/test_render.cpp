@@ -163,6 +163,38 @@ TEST_CASE("render: threads, supersampling and culling options") {
     CHECK_THROWS_AS((void)isin::render(scene, cam, opt), std::invalid_argument);
 }
 
+TEST_CASE("camera: a sphere in the middle of a 400×400, 300×600 or 600×300 image is round") {
+    isin::Scene<float, isin::Sphere> scene;
+    scene.add(isin::Sphere<float>{{0, 0, 50}, 10}, scene.add_material({}));
+    scene.add_light({{0, 0, 0}});
+    isin::RenderOptions opt;
+    opt.progress = false;
+    for (const auto& size : {std::pair{400, 400}, std::pair{300, 600}, std::pair{600, 300}}) {
+        const int w = size.first;
+        const int h = size.second;
+        CAPTURE(w);
+        CAPTURE(h);
+        const auto cam = isin::Camera<float>::look_at(w, h, {0, 0, 0}, {0, 0, 50}, {0, 1, 0}, 45.0f);
+        const isin::Image image = isin::render(scene, cam, opt);
+        int left = w, right = -1, top = h, bottom = -1;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                if (image(x, y) != isin::to_rgb8(scene.background))
+                    left = std::min(left, x), right = std::max(right, x), top = std::min(top, y),
+                    bottom = std::max(bottom, y);
+        const int across = right - left + 1, down = bottom - top + 1;
+        CHECK(across > 40);
+        CHECK(std::abs(across - down) <= 1); // round, not stretched
+        // The note's 16×9 plane stretches it: 3.6× at 300×600 (the cube).
+        const isin::Camera<float> note{w, h, {0, 0, 0}, 0.0f, 0.0f};
+        const isin::Image stretched = isin::render(scene, note, opt);
+        int note_across = 0, note_down = 0;
+        for (int x = 0; x < w; ++x) note_across += stretched(x, h / 2) != isin::to_rgb8(scene.background);
+        for (int y = 0; y < h; ++y) note_down += stretched(w / 2, y) != isin::to_rgb8(scene.background);
+        if (w != h * 16 / 9) CHECK(std::abs(note_across - note_down) > 2);
+    }
+}
+
 TEST_CASE("row_band: N bands tile the rows in order, sizes within one row; bad bands throw") {
     for (const int height : {2, 9, 90, 451, 32768})
         for (const int count : {1, 2, 7, 9, 64}) {

@@ -2,6 +2,7 @@
 /// isin — the pinhole camera of note §3: eye, a 16×9 image plane at distance 10, primary rays.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -12,8 +13,11 @@ namespace isin {
 
 /// Pinhole camera. By default it is the note's: eye at the origin looking along +Z, a 16×9 image
 /// plane centred on the Z axis at z = 10, pixel (0,0) top-left. A pose (position, yaw about +Y,
-/// pitch about the camera's right axis, radians, left-handed: yaw +90° turns +Z into +X) moves and
-/// turns that whole rig; the plane keeps its size and distance.
+/// pitch about the camera's right axis, roll about its view direction, radians, left-handed: yaw
+/// +90° turns +Z into +X, roll +90° turns the image's up towards its old right) moves and turns
+/// that whole rig; the plane keeps its size and distance. The note's plane has square pixels only
+/// at 16:9 sizes; set_vertical_fov or square_pixels, or the look_at with an up vector, give square
+/// pixels at any width × height.
 template <class T>
 class Camera {
     static_assert(std::is_floating_point_v<T>, "isin::Camera needs a floating-point type");
@@ -26,10 +30,10 @@ public:
     /// sides are in [2, max_side] (the mapping divides by W − 1 and H − 1).
     Camera(int width, int height) : Camera(width, height, Vertex<T>{T(0), T(0), T(0)}, T(0), T(0)) {}
 
-    /// A camera at `position`, turned by `yaw` and `pitch` (radians), note's plane otherwise.
-    Camera(int width, int height, const Vertex<T>& position, T yaw, T pitch)
+    /// A camera at `position`, turned by `yaw`, `pitch` and `roll` (radians), note's plane otherwise.
+    Camera(int width, int height, const Vertex<T>& position, T yaw, T pitch, T roll = T(0))
         : width_(checked_side(width, "width")), height_(checked_side(height, "height")) {
-        set_pose(position, yaw, pitch);
+        set_pose(position, yaw, pitch, roll);
     }
 
     /// A camera at `eye` turned to look at `target` (yaw and pitch from the direction; no roll).
@@ -41,30 +45,76 @@ public:
         return Camera(width, height, eye, d == Vertex<T>{} ? T(0) : yaw, pitch);
     }
 
+    /// A camera at `eye` looking at `target` with `up` upwards in the image (any vector not along
+    /// the view; the image's up is its part perpendicular to the view), with square pixels and
+    /// `vfov_degrees` between the centres of the top and bottom rows (the note's camera has
+    /// 2·atan(4.5/10) ≈ 48.46°). Throws std::invalid_argument unless 0 < vfov_degrees < 180.
+    /// If eye and target coincide or are not finite, it looks along +Z; if `up` is zero, not
+    /// finite or along the view, it keeps the image level (no roll).
+    [[nodiscard]] static Camera look_at(int width, int height, const Vertex<T>& eye, const Vertex<T>& target,
+                                        const Vertex<T>& up, T vfov_degrees) {
+        Camera cam = look_at(width, height, eye, target);
+        cam.set_vertical_fov(vfov_degrees);
+        // The roll that turns the level image's up (up0) towards `up` about the view direction.
+        const Vertex<T> right0{std::cos(cam.yaw_), T(0), -std::sin(cam.yaw_)};
+        const Vertex<T> up0 = cross(cam.forward_, right0);
+        const Vertex<T> across = up - dot(up, cam.forward_) * cam.forward_; // `up` in the image plane
+        const T x = dot(across, right0), y = dot(across, up0), eps = std::numeric_limits<T>::epsilon();
+        if (x * x + y * y > T(64) * eps * eps * dot(up, up)) // NaN, zero or along the view: level
+            cam.set_pose(cam.position_, cam.yaw_, cam.pitch_, std::atan2(x, y));
+        return cam;
+    }
+
+    /// Square pixels with `vfov_degrees` between the centres of the top and bottom rows: the plane,
+    /// at its distance, gets height 2·d·tan(vfov/2) and width height·(W−1)/(H−1). Throws
+    /// std::invalid_argument unless 0 < vfov_degrees < 180.
+    void set_vertical_fov(T vfov_degrees) {
+        if (!(vfov_degrees > T(0) && vfov_degrees < T(180)))
+            throw std::invalid_argument("isin::Camera: vertical field of view " + std::to_string(vfov_degrees) +
+                                        "° is outside (0°, 180°)");
+        plane_height = T(2) * plane_distance * std::tan(vfov_degrees * T(3.14159265358979323846) / T(360));
+        square_pixels();
+    }
+    /// Square pixels keeping the plane's height: its width becomes height·(W−1)/(H−1) (the note's
+    /// 9-high plane at 800×450: 16.02 wide, not 16).
+    void square_pixels() noexcept { plane_width = plane_height * T(width_ - 1) / T(height_ - 1); }
+    /// The vertical field of view in degrees, between the centres of the top and bottom rows.
+    [[nodiscard]] T vertical_fov() const noexcept {
+        return T(2) * std::atan(plane_height / (T(2) * plane_distance)) * T(180) / T(3.14159265358979323846);
+    }
+
     /// Moves and turns the camera. Non-finite values are ignored (the pose stays as it was).
-    void set_pose(const Vertex<T>& position, T yaw, T pitch) noexcept {
-        if (!is_finite(position) || !std::isfinite(yaw) || !std::isfinite(pitch)) return;
+    void set_pose(const Vertex<T>& position, T yaw, T pitch, T roll = T(0)) noexcept {
+        if (!is_finite(position) || !std::isfinite(yaw) || !std::isfinite(pitch) || !std::isfinite(roll)) return;
         position_ = position;
         yaw_ = yaw;
         pitch_ = pitch;
+        roll_ = roll;
         const T cy = std::cos(yaw), sy = std::sin(yaw), cp = std::cos(pitch), sp = std::sin(pitch);
         forward_ = {sy * cp, sp, cy * cp};
-        right_ = {cy, T(0), -sy};
-        up_ = cross(forward_, right_); // left-handed: right × up = forward
+        const Vertex<T> right0{cy, T(0), -sy};
+        const Vertex<T> up0 = cross(forward_, right0); // left-handed: right × up = forward
+        if (roll == T(0)) {
+            right_ = right0, up_ = up0;
+            return;
+        }
+        const T cr = std::cos(roll), sr = std::sin(roll);
+        right_ = cr * right0 - sr * up0;
+        up_ = sr * right0 + cr * up0;
     }
 
     /// Walking (note §12, keys W/S and A/D): a step along the heading in the horizontal plane
     /// (yaw only, so looking up or down does not make W fly), or sideways along the camera's
     /// right vector. Negative steps go the other way; non-finite steps are ignored.
-    void move_forward(T step) noexcept { set_pose(position_ + step * heading(), yaw_, pitch_); }
+    void move_forward(T step) noexcept { set_pose(position_ + step * heading(), yaw_, pitch_, roll_); }
     void move_backward(T step) noexcept { move_forward(-step); }
-    void move_right(T step) noexcept { set_pose(position_ + step * right_, yaw_, pitch_); }
+    void move_right(T step) noexcept { set_pose(position_ + step * right_, yaw_, pitch_, roll_); }
     void move_left(T step) noexcept { move_right(-step); }
     /// Turns by `yaw` (radians, positive turns right: +Z towards +X) and `pitch` (positive looks
     /// up); pitch stays within ±89° so that the view never flips over.
     void turn(T yaw, T pitch = T(0)) noexcept {
         const T limit = T(1.5533430342749532); // 89°
-        set_pose(position_, yaw_ + yaw, std::clamp(pitch_ + pitch, -limit, limit));
+        set_pose(position_, yaw_ + yaw, std::clamp(pitch_ + pitch, -limit, limit), roll_);
     }
     /// The horizontal direction the camera faces: (sin yaw, 0, cos yaw).
     [[nodiscard]] Vertex<T> heading() const noexcept { return {std::sin(yaw_), T(0), std::cos(yaw_)}; }
@@ -74,6 +124,7 @@ public:
     [[nodiscard]] const Vertex<T>& position() const noexcept { return position_; }
     [[nodiscard]] T yaw() const noexcept { return yaw_; }
     [[nodiscard]] T pitch() const noexcept { return pitch_; }
+    [[nodiscard]] T roll() const noexcept { return roll_; }
     [[nodiscard]] const Vertex<T>& forward() const noexcept { return forward_; }
     [[nodiscard]] const Vertex<T>& right() const noexcept { return right_; }
     [[nodiscard]] const Vertex<T>& up() const noexcept { return up_; }
@@ -106,7 +157,7 @@ private:
 
     int width_, height_;
     Vertex<T> position_{}, forward_{}, right_{}, up_{};
-    T yaw_ = T(0), pitch_ = T(0);
+    T yaw_ = T(0), pitch_ = T(0), roll_ = T(0);
 };
 
 } // namespace isin
