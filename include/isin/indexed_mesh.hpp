@@ -1,6 +1,6 @@
 #pragma once
 /// isin — a triangle mesh by index: each vertex stored once, triangles as three vertex indices,
-/// with optional per-vertex normals and texture coordinates and per-triangle material ids. What a
+/// with optional per-vertex normals, texture coordinates and colours and per-triangle material ids. What a
 /// Bvh builds from, what Scene::add_mesh stores once and places again with add_instance.
 ///
 ///     isin::Mesh<float> quad;
@@ -15,6 +15,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "color.hpp"
 #include "triangle.hpp"
 #include "vec.hpp"
 
@@ -29,6 +30,7 @@ struct Mesh {
     std::vector<Vertex<T>> normals;                    ///< per vertex, or empty
     std::vector<std::array<T, 2>> uvs;                 ///< per vertex texture coordinates, or empty
     std::vector<std::uint32_t> material;               ///< per triangle material ids, or empty
+    std::vector<Color<T>> colors;                      ///< per vertex colours (linear, [0, 1]), or empty
 
     /// Number of triangles.
     [[nodiscard]] std::size_t size() const noexcept { return indices.size(); }
@@ -54,7 +56,7 @@ struct Mesh {
     }
 
     /// Throws std::invalid_argument naming the first problem: an index beyond positions, or an
-    /// optional array (normals, uvs: one per position; material: one per triangle) of another
+    /// optional array (normals, uvs, colors: one per position; material: one per triangle) of another
     /// length. Coordinates are not checked: non-finite and zero-area triangles are never hit.
     void validate() const {
         const auto fail = [](const std::string& why) { throw std::invalid_argument("isin::Mesh: " + why); };
@@ -67,6 +69,8 @@ struct Mesh {
             fail(std::to_string(normals.size()) + " normals for " + std::to_string(positions.size()) + " vertices");
         if (!uvs.empty() && uvs.size() != positions.size())
             fail(std::to_string(uvs.size()) + " uvs for " + std::to_string(positions.size()) + " vertices");
+        if (!colors.empty() && colors.size() != positions.size())
+            fail(std::to_string(colors.size()) + " colours for " + std::to_string(positions.size()) + " vertices");
         if (!material.empty() && material.size() != indices.size())
             fail(std::to_string(material.size()) + " material ids for " + std::to_string(indices.size()) +
                  " triangles");
