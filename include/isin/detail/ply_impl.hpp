@@ -1,8 +1,10 @@
 #pragma once
-/// isin — private: the PLY reader (header, then the elements in order; ASCII or binary) behind
-/// load_ply, load_mesh and load_model.
+/// isin — private: the PLY reader (header, then the elements in order; ASCII or binary of either
+/// byte order) behind load_ply, load_mesh and load_model: positions, the vertices' normals,
+/// texture coordinates and colours, and polygons triangulated.
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -10,6 +12,8 @@
 #include <limits>
 #include <string>
 #include <string_view>
+#include <system_error>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -23,7 +27,7 @@ namespace isin {
 namespace detail {
 
 // =================================================================================================
-// PLY: header, then the elements in order, ASCII or binary little-endian.
+// PLY: header, then the elements in order, ASCII or binary (little- or big-endian).
 // =================================================================================================
 
 enum class PlyType : unsigned char { none, i8, u8, i16, u16, i32, u32, f32, f64 };
@@ -71,13 +75,38 @@ enum class PlyType : unsigned char { none, i8, u8, i16, u16, i32, u32, f32, f64 
     }
 }
 
-enum class PlyRole : unsigned char { skip, x, y, z, indices };
+/// The PLY type of the integer type I.
+template <class I>
+[[nodiscard]] constexpr PlyType ply_type_of() noexcept {
+    if constexpr (std::is_same_v<I, std::int8_t>) return PlyType::i8;
+    if constexpr (std::is_same_v<I, std::uint8_t>) return PlyType::u8;
+    if constexpr (std::is_same_v<I, std::int16_t>) return PlyType::i16;
+    if constexpr (std::is_same_v<I, std::uint16_t>) return PlyType::u16;
+    if constexpr (std::is_same_v<I, std::int32_t>) return PlyType::i32;
+    if constexpr (std::is_same_v<I, std::uint32_t>) return PlyType::u32;
+    return PlyType::none;
+}
+
+/// Whether `count` values of `size` bytes (1, 2, 4 or 8) fit in `room` bytes: a shift, not a
+/// division, as it runs once a face.
+[[nodiscard]] constexpr bool ply_fits(unsigned long long count, std::size_t size, std::size_t room) noexcept {
+    const int shift = size == 8 ? 3 : size == 4 ? 2 : size == 2 ? 1 : 0;
+    return count <= (room >> shift);
+}
+
+enum class PlyFormat : unsigned char { ascii, binary_little_endian, binary_big_endian };
+
+/// What isin takes from a property: a coordinate, a normal's or texture coordinate's component,
+/// a colour channel, a face's corners, or nothing. Keep x … blue in this order (ply_read_body
+/// indexes by it).
+enum class PlyRole : unsigned char { skip, x, y, z, nx, ny, nz, tex_u, tex_v, red, green, blue, indices };
 
 struct PlyProperty {
     std::string name;
     PlyType type = PlyType::none;       // scalar type, or the item type of a list
     PlyType count_type = PlyType::none; // none for a scalar
     PlyRole role = PlyRole::skip;
+    double divisor = 1; // a colour channel's value is divided by it: the maximum of an integer type
 };
 
 struct PlyElement {
@@ -88,15 +117,56 @@ struct PlyElement {
 };
 
 struct PlyHeader {
-    bool binary = false;
+    PlyFormat format = PlyFormat::ascii;
     std::vector<PlyElement> elements;
     std::size_t data_offset = 0; // first byte after end_header's line
     std::size_t data_line = 0;   // its line number (ASCII)
     unsigned long long vertex_count = 0;
+    bool normals = false, uvs = false, colors = false; // what `vertex` carries
 };
 
-/// Parses the header and marks the properties isin reads (x, y, z of `vertex`, the index list
-/// of `face`).
+/// The scalar property `name` of `el`, or nullptr.
+[[nodiscard]] inline PlyProperty* ply_scalar(PlyElement& el, std::string_view name) noexcept {
+    for (PlyProperty& p : el.properties)
+        if (p.count_type == PlyType::none && p.name == name) return &p;
+    return nullptr;
+}
+
+/// Marks the attributes of `vertex` that isin reads: normals nx, ny, nz (all three, else none),
+/// the first complete pair of texture coordinates in header order (s/t, u/v, texture_u/texture_v,
+/// texture_s/texture_t), colours red, green, blue (all three, else none; alpha is not read).
+inline void ply_mark_attributes(PlyElement& el, PlyHeader& h) {
+    PlyProperty* const n[3] = {ply_scalar(el, "nx"), ply_scalar(el, "ny"), ply_scalar(el, "nz")};
+    if (n[0] && n[1] && n[2]) {
+        n[0]->role = PlyRole::nx, n[1]->role = PlyRole::ny, n[2]->role = PlyRole::nz;
+        h.normals = true;
+    }
+    static constexpr const char* pairs[4][2] = {
+        {"s", "t"}, {"u", "v"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}};
+    for (std::size_t i = 0; i < el.properties.size() && !h.uvs; ++i) {
+        for (const auto& pair : pairs) {
+            if (el.properties[i].name != pair[0] && el.properties[i].name != pair[1]) continue;
+            PlyProperty* const u = ply_scalar(el, pair[0]);
+            PlyProperty* const v = ply_scalar(el, pair[1]);
+            if (!u || !v) continue;
+            u->role = PlyRole::tex_u, v->role = PlyRole::tex_v;
+            h.uvs = true;
+            break;
+        }
+    }
+    PlyProperty* const c[3] = {ply_scalar(el, "red"), ply_scalar(el, "green"), ply_scalar(el, "blue")};
+    if (c[0] && c[1] && c[2]) {
+        const PlyRole roles[3] = {PlyRole::red, PlyRole::green, PlyRole::blue};
+        for (int k = 0; k < 3; ++k) {
+            c[k]->role = roles[k];
+            if (ply_is_integer(c[k]->type)) c[k]->divisor = static_cast<double>(ply_range(c[k]->type).second);
+        }
+        h.colors = true;
+    }
+}
+
+/// Parses the header and marks the properties isin reads (x, y, z and the attributes of
+/// `vertex`, the index list of `face`). Unknown keywords after the format line are skipped.
 [[nodiscard]] inline PlyHeader ply_parse_header(const char* who, const std::string& path, std::string_view file) {
     PlyHeader h;
     std::size_t pos = 0, line = 0;
@@ -135,12 +205,15 @@ struct PlyHeader {
         if (key == "format") {
             if (have_format) throw fail("second format line");
             if (tokens.size() != 3) throw fail("malformed format line");
-            if (tokens[1] == "binary_big_endian")
-                throw fail("binary_big_endian PLY is not supported (use ascii or binary_little_endian)");
-            if (tokens[1] != "ascii" && tokens[1] != "binary_little_endian")
+            if (tokens[1] == "ascii")
+                h.format = PlyFormat::ascii;
+            else if (tokens[1] == "binary_little_endian")
+                h.format = PlyFormat::binary_little_endian;
+            else if (tokens[1] == "binary_big_endian")
+                h.format = PlyFormat::binary_big_endian;
+            else
                 throw fail("unknown PLY format " + mesh_quote(tokens[1].data(), tokens[1].data() + tokens[1].size()));
             if (tokens[2] != "1.0") throw fail("unsupported PLY version '" + tokens[2].substr(0, 40) + "'");
-            h.binary = tokens[1] != "ascii";
             have_format = true;
         } else if (key == "element") {
             if (tokens.size() != 3) throw fail("malformed element line");
@@ -193,14 +266,15 @@ struct PlyHeader {
         } else if (key == "end_header") {
             if (tokens.size() != 1) throw fail("malformed end_header line");
             break;
-        } else {
-            throw fail("unknown header keyword " + mesh_quote(key.data(), key.data() + key.size()));
-        }
+        } else if (!have_format) {
+            throw fail("unknown header keyword " + mesh_quote(key.data(), key.data() + key.size()) +
+                       " before the format line");
+        } // else skipped, as other readers do: exporters write their own lines (Blender does)
     }
     if (!have_format) throw fail("header has no format line");
     h.data_offset = pos;
     h.data_line = line + 1;
-    for (const PlyElement& el : h.elements) {
+    for (PlyElement& el : h.elements) {
         const auto has = [&](PlyRole role) {
             for (const PlyProperty& p : el.properties)
                 if (p.role == role) return true;
@@ -211,7 +285,13 @@ struct PlyHeader {
             if (!has(PlyRole::x)) throw mesh_error(who, path, at + "property x");
             if (!has(PlyRole::y)) throw mesh_error(who, path, at + "property y");
             if (!has(PlyRole::z)) throw mesh_error(who, path, at + "property z");
+            if (el.count > std::numeric_limits<std::uint32_t>::max())
+                throw mesh_error(who, path,
+                                 "line " + std::to_string(el.line) + ": element 'vertex' declares " +
+                                     std::to_string(el.count) +
+                                     " vertices; isin's 32-bit indices address at most 2^32 - 1 = 4294967295");
             h.vertex_count = el.count;
+            ply_mark_attributes(el, h);
         }
         if (el.name == "face" && !has(PlyRole::indices))
             throw mesh_error(who, path, at + "list property vertex_indices");
@@ -231,8 +311,47 @@ struct PlyContext {
     [[nodiscard]] std::string prefix() const { return element ? text() + ": " : std::string(); }
 };
 
-/// Binary little-endian data; positions are byte offsets from the start of the file.
+/// The host's byte order: 1 little-endian, 2 big-endian, 0 unknown (then bytes are assembled one
+/// by one).
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && defined(__ORDER_BIG_ENDIAN__)
+inline constexpr int ply_host_order = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ ? 1
+                                      : __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__  ? 2
+                                                                                : 0;
+#elif defined(_MSC_VER) // every Windows target is little-endian
+inline constexpr int ply_host_order = 1;
+#else
+inline constexpr int ply_host_order = 0;
+#endif
+
+/// Unsigned integer of n bytes.
+template <std::size_t n>
+using PlyUint = std::conditional_t<
+    n == 1, std::uint8_t,
+    std::conditional_t<n == 2, std::uint16_t, std::conditional_t<n == 4, std::uint32_t, std::uint64_t>>>;
+
+/// `u` with its bytes reversed.
+template <class U>
+[[nodiscard]] inline U ply_byte_swap(U u) noexcept {
+#if defined(__GNUC__) || defined(__clang__)
+    if constexpr (sizeof(U) == 2)
+        return __builtin_bswap16(u);
+    else if constexpr (sizeof(U) == 4)
+        return __builtin_bswap32(u);
+    else
+        return __builtin_bswap64(u);
+#else
+    std::uint64_t r = 0, w = u;
+    for (std::size_t i = 0; i < sizeof(U); ++i, w >>= 8) r = (r << 8) | (w & 0xFFu);
+    return static_cast<U>(r);
+#endif
+}
+
+/// Binary data in byte order `Format` (binary_little_endian or binary_big_endian); positions are
+/// byte offsets from the start of the file.
+template <PlyFormat Format>
 class PlyBinaryReader {
+    static_assert(Format != PlyFormat::ascii, "PlyBinaryReader reads binary data");
+
 public:
     PlyBinaryReader(const char* who, const std::string& path, std::string_view file, std::size_t pos)
         : who_(who), path_(path), data_(file.data()), size_(file.size()), pos_(pos), start_(pos) {}
@@ -260,30 +379,37 @@ public:
 
     long long read_int(PlyType t) {
         switch (t) {
-        case PlyType::i8: return bits<std::int8_t>(1);
-        case PlyType::u8: return bits<std::uint8_t>(1);
-        case PlyType::i16: return bits<std::int16_t>(2);
-        case PlyType::u16: return bits<std::uint16_t>(2);
-        case PlyType::i32: return bits<std::int32_t>(4);
-        case PlyType::u32: return bits<std::uint32_t>(4);
+        case PlyType::i8: return bits<std::int8_t>();
+        case PlyType::u8: return bits<std::uint8_t>();
+        case PlyType::i16: return bits<std::int16_t>();
+        case PlyType::u16: return bits<std::uint16_t>();
+        case PlyType::i32: return bits<std::int32_t>();
+        case PlyType::u32: return bits<std::uint32_t>();
         default: fail("an integer type is needed here"); // not reached: the header checks it
         }
     }
+    /// The next value, of the integer type I (a list's item type, resolved once a list).
+    template <class I>
+    long long read_int_as() {
+        return bits<I>();
+    }
     double read_real(PlyType t) {
-        if (t == PlyType::f32) return static_cast<double>(bits<float>(4));
-        if (t == PlyType::f64) return bits<double>(8);
+        if (t == PlyType::f32) return static_cast<double>(bits<float>());
+        if (t == PlyType::f64) return bits<double>();
         return static_cast<double>(read_int(t));
     }
+    /// An attribute's value: as read_real (binary values cannot overflow a double).
+    double read_attribute(PlyType t) { return read_real(t); }
     void skip(PlyType t) { take(ply_size(t)); }
     void skip_items(PlyType t, unsigned long long count) {
         start_ = pos_;
-        if (count > (size_ - pos_) / ply_size(t))
+        if (!ply_fits(count, ply_size(t), size_ - pos_))
             truncated(context.text() + ": list of " + std::to_string(count) + " items");
         pos_ += static_cast<std::size_t>(count) * ply_size(t);
     }
     /// Throws unless `count` values of type t are left (a list about to be read).
     void need_items(PlyType t, unsigned long long count) const {
-        if (count > (size_ - pos_) / ply_size(t))
+        if (!ply_fits(count, ply_size(t), size_ - pos_))
             truncated(context.text() + ": list of " + std::to_string(count) + " items");
     }
     void finish() const noexcept {} // bytes after the last element are ignored
@@ -296,25 +422,25 @@ private:
         pos_ += n;
         return p;
     }
-    /// The n little-endian bytes at the cursor as a V (same size), whatever the host's order.
+    /// The sizeof(V) bytes at the cursor, in the file's byte order, as a V: one copy, plus a
+    /// byte swap where the host's order differs.
     template <class V>
-    V bits(std::size_t n) {
+    V bits() {
+        constexpr std::size_t n = sizeof(V);
+        constexpr bool big = Format == PlyFormat::binary_big_endian;
         const unsigned char* p = take(n);
-        std::uint64_t u = 0;
-        for (std::size_t i = n; i-- > 0;) u = (u << 8) | static_cast<std::uint64_t>(p[i]);
-        V v;
-        if constexpr (sizeof(V) == 1) {
-            const auto b = static_cast<std::uint8_t>(u);
-            std::memcpy(&v, &b, 1);
-        } else if constexpr (sizeof(V) == 2) {
-            const auto b = static_cast<std::uint16_t>(u);
-            std::memcpy(&v, &b, 2);
-        } else if constexpr (sizeof(V) == 4) {
-            const auto b = static_cast<std::uint32_t>(u);
-            std::memcpy(&v, &b, 4);
+        PlyUint<n> u = 0;
+        if constexpr (ply_host_order != 0) {
+            std::memcpy(&u, p, n);
+            if constexpr (n > 1 && big != (ply_host_order == 2)) u = ply_byte_swap(u);
         } else {
-            std::memcpy(&v, &u, 8);
+            for (std::size_t i = 0; i < n; ++i) {
+                const unsigned char byte = p[big ? i : n - 1 - i];
+                u = static_cast<PlyUint<n>>((static_cast<std::uint64_t>(u) << 8) | byte);
+            }
         }
+        V v;
+        std::memcpy(&v, &u, n);
         return v;
     }
 
@@ -359,18 +485,13 @@ public:
             fail("value " + mesh_quote(tb_, te_) + " is out of range for its type");
         return v;
     }
-    double read_real(PlyType t) {
-        if (ply_is_integer(t)) return static_cast<double>(read_int(t));
-        next();
-        double v = 0;
-        const NumberStatus status = mesh_parse_real(tb_, te_, v);
-        if (status == NumberStatus::ok) return v;
-        const int special = mesh_special_word(tb_, te_); // NaN and infinity are values here
-        if (special == 1) return std::numeric_limits<double>::quiet_NaN();
-        if (special == 2)
-            return *tb_ == '-' ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
-        fail(mesh_bad_real("number", tb_, te_, status));
+    template <class I>
+    long long read_int_as() {
+        return read_int(ply_type_of<I>());
     }
+    double read_real(PlyType t) { return real(t, false); }
+    /// An attribute's value: as read_real, but a decimal beyond a double's range is infinite.
+    double read_attribute(PlyType t) { return real(t, true); }
     void skip(PlyType) { next(); }
     void skip_items(PlyType, unsigned long long count) {
         need_items(PlyType::none, count);
@@ -405,6 +526,19 @@ private:
         while (pos_ < size_ && !space(data_[pos_])) ++pos_;
         te_ = data_ + pos_;
     }
+    double real(PlyType t, bool overflow_is_infinite) {
+        if (ply_is_integer(t)) return static_cast<double>(read_int(t));
+        next();
+        double v = 0;
+        const NumberStatus status = mesh_parse_real(tb_, te_, v);
+        if (status == NumberStatus::ok) return v;
+        constexpr double inf = std::numeric_limits<double>::infinity();
+        const int special = mesh_special_word(tb_, te_); // NaN and infinity are values here
+        if (special == 1) return std::numeric_limits<double>::quiet_NaN();
+        if (special == 2 || (overflow_is_infinite && status == NumberStatus::out_of_range))
+            return *tb_ == '-' ? -inf : inf;
+        fail(mesh_bad_real("number", tb_, te_, status));
+    }
 
     const char* who_;
     const std::string& path_;
@@ -414,36 +548,80 @@ private:
     const char* te_ = nullptr;
 };
 
-/// Reads every element in order; keeps the vertices' positions and the faces' fan triangles.
+/// True when every one of the n values is finite and representable in T: an attribute that is
+/// not is stored as zeros (a zero normal: no usable normal).
+template <class T>
+[[nodiscard]] inline bool ply_all_fit(const double* v, int n) noexcept {
+    for (int k = 0; k < n; ++k)
+        if (!mesh_fits<T>(v[k])) return false;
+    return true;
+}
+
+/// Throws for a coordinate v that is NaN, infinite or beyond T's range.
 template <class T, class Reader>
-inline void ply_read_body(Reader& r, const PlyHeader& h, std::vector<Vertex<T>>& vertices,
-                          std::vector<std::array<std::size_t, 3>>& triangles) {
+[[noreturn]] void ply_bad_coordinate(const Reader& r, PlyRole role, double v) {
+    const std::string axis = role == PlyRole::x ? "x" : role == PlyRole::y ? "y" : "z";
+    if (std::isnan(v)) r.fail("coordinate " + axis + " is NaN");
+    if (!std::isfinite(v)) r.fail("coordinate " + axis + " is infinite");
+    r.fail("coordinate " + axis + " = " + mesh_number(v) + " does not fit in " + mesh_type_name<T>());
+}
+
+/// Reads a face's n corner indices (items of type I) and appends its fan (v0, vi, vi+1).
+template <class I, class Reader>
+inline void ply_read_fan(Reader& r, long long n, unsigned long long vertex_count,
+                         std::vector<std::array<std::uint32_t, 3>>& indices) {
+    std::uint32_t v0 = 0, prev = 0;
+    for (long long k = 0; k < n; ++k) {
+        const long long index = r.template read_int_as<I>();
+        if (index < 0 || static_cast<unsigned long long>(index) >= vertex_count)
+            r.fail("vertex index " + std::to_string(index) + " is out of range (the file has " +
+                   std::to_string(vertex_count) + " vertices)");
+        const auto cur = static_cast<std::uint32_t>(index); // vertex_count ≤ 2^32 − 1
+        if (k == 0)
+            v0 = cur;
+        else if (k > 1)
+            indices.push_back({v0, prev, cur}); // fan (v0, vi, vi+1)
+        prev = cur;
+    }
+}
+
+/// Reads every element in order into `mesh`: the vertices' positions and attributes, the faces'
+/// fans; `runs` records each polygon of 4 or more corners for retriangulate_fans.
+template <class T, class Reader>
+inline void ply_read_body(Reader& r, const PlyHeader& h, Mesh<T>& mesh, std::vector<FanRun>& runs) {
+    constexpr auto attr = [](PlyRole role) { return static_cast<int>(role) - static_cast<int>(PlyRole::nx); };
     for (const PlyElement& el : h.elements) {
         if (el.properties.empty() || el.count == 0) continue;
         r.context = {&el, 0};
         r.check_room(el);
         const bool is_vertex = el.name == "vertex", is_face = el.name == "face";
-        if (is_vertex) vertices.reserve(static_cast<std::size_t>(el.count)); // bounded by check_room
+        if (is_vertex) { // bounded by check_room; the attributes only where the file has them
+            const auto n = static_cast<std::size_t>(el.count);
+            mesh.positions.reserve(n);
+            if (h.normals) mesh.normals.reserve(n);
+            if (h.uvs) mesh.uvs.reserve(n);
+            if (h.colors) mesh.colors.reserve(n);
+        }
         if (is_face) // a real face has at least 3 indices: reserve no more than that allows
-            triangles.reserve(static_cast<std::size_t>(
+            mesh.indices.reserve(static_cast<std::size_t>(
                 std::min<unsigned long long>(el.count, r.remaining() / (4 * Reader::least_size(PlyType::u8)))));
         for (unsigned long long i = 0; i < el.count; ++i) {
             r.context.index = i;
             T xyz[3] = {T(0), T(0), T(0)};
+            double a[8]; // nx, ny, nz, u, v, red, green, blue as read (each set when its flag is)
             for (const PlyProperty& p : el.properties) {
                 if (p.count_type == PlyType::none) {
                     if (p.role == PlyRole::skip) {
                         r.skip(p.type);
                         continue;
                     }
+                    if (p.role >= PlyRole::nx) {
+                        a[attr(p.role)] = r.read_attribute(p.type) / p.divisor;
+                        continue;
+                    }
                     const double v = r.read_real(p.type);
-                    const char* axis = p.role == PlyRole::x ? "x" : p.role == PlyRole::y ? "y" : "z";
-                    if (std::isnan(v)) r.fail(std::string("coordinate ") + axis + " is NaN");
-                    if (!std::isfinite(v)) r.fail(std::string("coordinate ") + axis + " is infinite");
-                    if (!mesh_fits<T>(v))
-                        r.fail(std::string("coordinate ") + axis + " = " + mesh_number(v) + " does not fit in " +
-                               mesh_type_name<T>());
-                    xyz[p.role == PlyRole::x ? 0 : p.role == PlyRole::y ? 1 : 2] = static_cast<T>(v);
+                    if (!mesh_fits<T>(v)) ply_bad_coordinate<T>(r, p.role, v); // one test while all is well
+                    xyz[static_cast<int>(p.role) - static_cast<int>(PlyRole::x)] = static_cast<T>(v);
                     continue;
                 }
                 const long long n = r.read_int(p.count_type);
@@ -454,49 +632,64 @@ inline void ply_read_body(Reader& r, const PlyHeader& h, std::vector<Vertex<T>>&
                 }
                 if (n < 3) r.fail("face has " + std::to_string(n) + " vertices, needs at least 3");
                 r.need_items(p.type, static_cast<unsigned long long>(n));
-                std::size_t v0 = 0, prev = 0;
-                for (long long k = 0; k < n; ++k) {
-                    const long long index = r.read_int(p.type);
-                    if (index < 0 || static_cast<unsigned long long>(index) >= h.vertex_count)
-                        r.fail("vertex index " + std::to_string(index) + " is out of range (the file has " +
-                               std::to_string(h.vertex_count) + " vertices)");
-                    const auto cur = static_cast<std::size_t>(index);
-                    if (k == 0)
-                        v0 = cur;
-                    else if (k > 1)
-                        triangles.push_back({v0, prev, cur}); // fan (v0, vi, vi+1)
-                    prev = cur;
+                if (n > 3) runs.push_back({mesh.indices.size(), static_cast<std::size_t>(n)});
+                switch (p.type) { // the item type chosen once a face, not once an index
+                case PlyType::i8: ply_read_fan<std::int8_t>(r, n, h.vertex_count, mesh.indices); break;
+                case PlyType::u8: ply_read_fan<std::uint8_t>(r, n, h.vertex_count, mesh.indices); break;
+                case PlyType::i16: ply_read_fan<std::int16_t>(r, n, h.vertex_count, mesh.indices); break;
+                case PlyType::u16: ply_read_fan<std::uint16_t>(r, n, h.vertex_count, mesh.indices); break;
+                case PlyType::i32: ply_read_fan<std::int32_t>(r, n, h.vertex_count, mesh.indices); break;
+                default: ply_read_fan<std::uint32_t>(r, n, h.vertex_count, mesh.indices); break; // the header checks it
                 }
             }
-            if (is_vertex) vertices.push_back({xyz[0], xyz[1], xyz[2]});
+            if (!is_vertex) continue;
+            mesh.positions.push_back({xyz[0], xyz[1], xyz[2]});
+            if (h.normals) {
+                const double* N = a + attr(PlyRole::nx);
+                mesh.normals.push_back(ply_all_fit<T>(N, 3)
+                                           ? Vertex<T>{static_cast<T>(N[0]), static_cast<T>(N[1]), static_cast<T>(N[2])}
+                                           : Vertex<T>{T(0), T(0), T(0)});
+            }
+            if (h.uvs) {
+                const double* uv = a + attr(PlyRole::tex_u);
+                mesh.uvs.push_back(ply_all_fit<T>(uv, 2)
+                                       ? std::array<T, 2>{static_cast<T>(uv[0]), static_cast<T>(uv[1])}
+                                       : std::array<T, 2>{T(0), T(0)});
+            }
+            if (h.colors) {
+                const double* c = a + attr(PlyRole::red);
+                mesh.colors.push_back(ply_all_fit<T>(c, 3)
+                                          ? Color<T>{static_cast<T>(c[0]), static_cast<T>(c[1]), static_cast<T>(c[2])}
+                                          : Color<T>{T(0), T(0), T(0)});
+            }
         }
     }
     r.context = {};
     r.finish();
 }
 
+/// The mesh of a PLY file's bytes: positions, the normals, texture coordinates and colours
+/// `vertex` has (else empty), every face of n corners as n − 2 triangles (polygons triangulated
+/// by retriangulate_fans, winding kept). Throws MeshError naming `name` and where.
 template <class T>
 [[nodiscard]] Mesh<T> parse_ply_mesh(const char* who, const std::string& name, std::string_view file) {
     static_assert(std::is_floating_point_v<T>, "isin::load_ply needs a floating-point type");
     const PlyHeader h = ply_parse_header(who, name, file);
-    std::vector<Vertex<T>> vertices;
-    std::vector<std::array<std::size_t, 3>> tris;
-    if (h.binary) {
-        PlyBinaryReader r(who, name, file, h.data_offset);
-        ply_read_body<T>(r, h, vertices, tris);
+    Mesh<T> mesh;
+    std::vector<FanRun> runs;
+    if (h.format == PlyFormat::binary_little_endian) {
+        PlyBinaryReader<PlyFormat::binary_little_endian> r(who, name, file, h.data_offset);
+        ply_read_body<T>(r, h, mesh, runs);
+    } else if (h.format == PlyFormat::binary_big_endian) {
+        PlyBinaryReader<PlyFormat::binary_big_endian> r(who, name, file, h.data_offset);
+        ply_read_body<T>(r, h, mesh, runs);
     } else {
         PlyAsciiReader r(who, name, file, h.data_offset, h.data_line);
-        ply_read_body<T>(r, h, vertices, tris);
+        ply_read_body<T>(r, h, mesh, runs);
     }
-    Mesh<T> mesh;
-    mesh.positions = std::move(vertices);
-    mesh.indices.reserve(tris.size());
-    for (const auto& t : tris)
-        mesh.indices.push_back({static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]),
-                                static_cast<std::uint32_t>(t[2])});
+    if (!runs.empty()) retriangulate_fans(mesh.positions, mesh.indices, runs); // faces may precede vertices
     return mesh;
 }
-
 
 } // namespace detail
 
