@@ -91,4 +91,32 @@ template <class T>
     return {to_byte(c.r), to_byte(c.g), to_byte(c.b)};
 }
 
+/// How 8-bit values relate to the linear intensities isin shades with: `linear` (byte / 255, the
+/// note's convention and isin's default) or `srgb` (the sRGB transfer curve of IEC 61966-2-1,
+/// which PNG and JPEG files from cameras and paint programs assume).
+enum class ColorEncoding { linear, srgb };
+
+/// Linear intensity of an sRGB-encoded value c in [0, 1] (IEC 61966-2-1): c / 12.92 up to
+/// 0.04045, ((c + 0.055) / 1.055)^2.4 above.
+template <class T>
+[[nodiscard]] inline T srgb_to_linear(T c) noexcept {
+    return c <= T(0.04045) ? c / T(12.92) : std::pow((c + T(0.055)) / T(1.055), T(2.4));
+}
+
+/// sRGB encoding of a linear intensity c in [0, 1] (IEC 61966-2-1): 12.92·c up to 0.0031308,
+/// 1.055·c^(1/2.4) − 0.055 above. NaN and values ≤ 0 give 0, values ≥ 1 give 1.
+template <class T>
+[[nodiscard]] inline T linear_to_srgb(T c) noexcept {
+    if (!(c > T(0))) return T(0);
+    if (!(c < T(1))) return T(1);
+    return c <= T(0.0031308) ? T(12.92) * c : T(1.055) * std::pow(c, T(1) / T(2.4)) - T(0.055);
+}
+
+/// A colour as an 8-bit pixel in `encoding` (clamped, rounded).
+template <class T>
+[[nodiscard]] inline Rgb8 to_rgb8(const Color<T>& c, ColorEncoding encoding) noexcept {
+    if (encoding == ColorEncoding::linear) return to_rgb8(c);
+    return {to_byte(linear_to_srgb(c.r)), to_byte(linear_to_srgb(c.g)), to_byte(linear_to_srgb(c.b))};
+}
+
 } // namespace isin

@@ -25,7 +25,8 @@
 ///
 /// Headers, one concept each: vec (§2), ray (§3), hit, camera (§3), triangle (§4, §10),
 /// sphere (§6), color, shading (§7, §8), offset (§9), culling (§11), texture (§10), image,
-/// mesh (OBJ/PLY files), scene (§5), render (§3–§11).
+/// mesh (OBJ/PLY files), model (meshes with materials and textures from files), scene (§5),
+/// render (§3–§11).
 #include "baldwin_weber.hpp"
 #include "batch.hpp"
 #include "bvh.hpp"
@@ -37,6 +38,7 @@
 #include "image_io.hpp"
 #include "indexed_mesh.hpp"
 #include "mesh.hpp"
+#include "model.hpp"
 #include "offset.hpp"
 #include "ray.hpp"
 #include "read_limits.hpp"

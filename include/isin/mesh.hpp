@@ -8,11 +8,12 @@
 ///     std::vector<isin::Triangle<float>> tris = isin::load_mesh<float>("bunny.ply");
 ///     for (const auto& tri : tris) scene.add(tri, material);
 ///
-/// What is read: vertex positions and polygonal faces only. Every polygon v0 v1 … vn−1 becomes
-/// the fan (v0, vi, vi+1), i = 1 … n−2, so the winding and with it the side `normal()` points
-/// to is kept. Normals, texture coordinates, colours, materials (OBJ `mtllib`/`usemtl`: no .mtl
-/// file is opened), lines, points and any other PLY element or property are ignored. A file
-/// without faces is not an error: the result is an empty vector.
+/// What is read: vertex positions and polygonal faces only (isin::load_model, model.hpp, reads
+/// normals, texture coordinates, colours, groups and materials as well). A convex polygon
+/// v0 v1 … vn−1 becomes the fan (v0, vi, vi+1), i = 1 … n−2; any other (concave, or not planar)
+/// is cut into n−2 triangles by ear clipping in its plane; either way the winding, and with it the
+/// side `normal()` points to, is kept. Lines, points and other PLY elements and properties are
+/// ignored. A file without faces is not an error: the result is an empty vector.
 ///
 /// Error policy: a file that cannot be read or is malformed throws isin::MeshError (a
 /// std::runtime_error) whose what() names the file and where the problem is: "line N" for OBJ
@@ -49,14 +50,16 @@ public:
 /// A mesh file format, for the in-memory loader.
 enum class MeshFormat { obj, ply };
 
-/// Triangles of a Wavefront OBJ file (`v` and `f` statements; polygons as fans, winding kept).
+/// Triangles of a Wavefront OBJ file (`v` and `f` statements; polygons triangulated, winding kept).
+/// UTF-16 or binary data is a MeshError saying so.
 /// Only regular files of at most limits.max_file_bytes are read. Throws MeshError naming the
 /// file and line.
 template <class T>
 [[nodiscard]] std::vector<Triangle<T>> load_obj(const std::string& path, const ReadLimits& limits = {});
 
-/// Triangles of a PLY file: ascii or binary_little_endian 1.0, positions from vertex x, y, z
-/// (any scalar type), polygons from face vertex_indices (or vertex_index) as fans, winding kept.
+/// Triangles of a PLY file: ascii or binary (little- or big-endian) 1.0, positions from vertex x,
+/// y, z (any scalar type), polygons from face vertex_indices (or vertex_index), triangulated with
+/// their winding kept.
 /// Only regular files of at most limits.max_file_bytes are read. Throws MeshError naming the
 /// file and line (ASCII) or byte offset (binary).
 template <class T>

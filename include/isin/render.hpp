@@ -40,6 +40,10 @@ struct RenderOptions {
     bool shadows = true;             ///< cast shadow rays (§9)
     Culling culling = Culling::none; ///< backface culling for primary rays (§11)
     bool progress = true;            ///< progress bar on stderr, when it is a terminal and the render takes > 1 s
+    /// How the image's bytes encode the linear intensities shaded: byte = 255·intensity, the
+    /// note's arithmetic (default), or sRGB, what screens and image viewers expect (pair it with
+    /// textures decoded from sRGB: ModelOptions::textures, ImageTexture's encoding).
+    ColorEncoding encoding = ColorEncoding::linear;
     /// The largest max_depth: trace() recurses once per bounce, and this many levels fit any
     /// thread's stack (as POV-Ray's max_trace_level, whose limit is also 256).
     static constexpr int max_depth_limit = 256;
@@ -101,34 +105,41 @@ template <class T, template <class> class... S>
     if (!sh) return scene.background;
     const SurfacePoint<T> sp = scene.surface(ray, sh);
     const Material<T>& m = scene.material(sp.material);
-    const Color<T> object = m.texture >= 0 && sp.has_texture_coordinates
-                                ? sample(scene.texture(m.texture), sp.st[0], sp.st[1], scene.texture_filter)
-                                : m.color;
+    const Color<T> object = sp.tint * (m.texture >= 0 && sp.has_texture_coordinates
+                                           ? sample(scene.texture(m.texture), sp.st[0], sp.st[1],
+                                                    m.texture_filter.value_or(scene.texture_filter))
+                                           : m.color);
     const Vertex<T>& d = ray.direction;
     const bool entering = dot(sp.normal, d) < T(0);
     const Vertex<T> Nf = entering ? sp.normal : -sp.normal; // the normal on the ray's side
-    const Vertex<T> V = -d;                                 // §7: towards the eye
+    // The shading normal on the same side (equal to Nf on flat surfaces); lights the point (§7).
+    const Vertex<T> Ns = dot(sp.shading_normal, Nf) < T(0) ? -sp.shading_normal : sp.shading_normal;
+    const Vertex<T> V = -d; // §7: towards the eye
 
-    Color<T> local = m.ka * object * scene.ambient_light; // §7: ambient
-    const T scale = max_abs(ray.origin);                  // the hit point's rounding grows with it
+    Color<T> local = m.ka * m.ambient_color * object * scene.ambient_light; // §7: ambient
+    const T scale = max_abs(ray.origin);                                    // the hit point's rounding grows with it
     const Vertex<T> above = offset_origin(sp.point, Nf, scale);
+    // Shadow rays leave from the shading point (= the hit point on flat surfaces), off the surface.
+    const Vertex<T> shadow_from = sp.shading_point == sp.point ? above : offset_origin(sp.shading_point, Nf, scale);
     for (const PointLight<T>& light : scene.lights) {
         const Vertex<T> to_light = light.position - sp.point;
         const Vertex<T> L = normalize(to_light);
-        if (!(dot(Nf, L) > T(0))) continue; // §7: facing away → unlit, no shadow ray needed
+        if (!(dot(Ns, L) > T(0))) continue; // §7: facing away → unlit, no shadow ray needed
         T visible = T(1);
         if (opt.shadows) { // §9: a ray towards the light; anything nearer than the light shadows
             ++stats.shadow;
-            visible = scene.transmittance(Ray<T>{above, light.position - above}, T(1));
+            visible = scene.transmittance(Ray<T>{shadow_from, light.position - shadow_from}, T(1));
         }
-        if (visible > T(0)) local += visible * phong_light(m, object, Nf, L, V, light.color);
+        if (visible > T(0)) local += visible * phong_light(m, object, Ns, L, V, light.color);
     }
     if (depth >= opt.max_depth || (m.reflectivity <= T(0) && m.transparency <= T(0))) return local;
 
     Color<T> result = std::max(T(0), T(1) - m.reflectivity - m.transparency) * local;
     if (m.reflectivity > T(0)) { // §8: Rd − 2(Rd·N)N from the hit point
         ++stats.reflection;
-        result += m.reflectivity * trace(scene, Ray<T>{above, reflect(d, Nf)}, depth + 1, opt, stats);
+        Vertex<T> mirrored = reflect(d, Ns);
+        if (!(dot(mirrored, Nf) > T(0))) mirrored = reflect(d, Nf); // a shading normal must not send it inside
+        result += m.reflectivity * trace(scene, Ray<T>{above, mirrored}, depth + 1, opt, stats);
     }
     if (m.transparency > T(0)) { // §8: straight through (ior = 1) or bent by Snell's law
         Vertex<T> dir = d;
@@ -216,7 +227,7 @@ template <class T, template <class> class... S>
                         ++local.primary;
                         sum += trace(scene, camera.primary_ray(px, py), 0, opt, local, skip); // §3
                     }
-                image(x, row) = to_rgb8(sum / T(N * N));
+                image(x, row) = to_rgb8(sum / T(N * N), opt.encoding);
             }
             const int done = rows_done.fetch_add(1) + 1;
             if (reporter && show_progress) {

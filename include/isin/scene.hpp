@@ -157,14 +157,24 @@ template <class T>
     return true;
 }
 
-/// What a hit looks like to the shader: point, unit normal, material, texture coordinates.
+/// What a hit looks like to the shader: point, unit geometric normal, the shading normal and
+/// point of smooth (Phong) shading, material, texture coordinates and vertex colour.
 template <class T>
 struct SurfacePoint {
-    Vertex<T> point;
-    Vertex<T> normal;
+    Vertex<T> point;  ///< on the ray
+    Vertex<T> normal; ///< the surface's own (geometric) unit normal, out of its front face
+    /// Unit normal for lighting: interpolated from a mesh's vertex normals by the hit's
+    /// barycentrics (Phong 1975), out of the same side as `normal`; else `normal`.
+    Vertex<T> shading_normal;
+    /// Where shadow rays start: the point moved off a smooth mesh's flat triangle towards the
+    /// curved surface its vertex normals describe, on the side the ray came from (Hanika, "Hacking
+    /// the shadow terminator", Ray Tracing Gems II ch. 4), which removes the dark facets where
+    /// light meets shadow; else `point`.
+    Vertex<T> shading_point;
     std::uint32_t material;
     bool has_texture_coordinates;
     std::array<T, 2> st;
+    Color<T> tint; ///< vertex colour interpolated by the barycentrics (white without colours)
 };
 
 /// A mesh stored in a scene (Scene::add_mesh), to place again with add_instance.
@@ -505,30 +515,39 @@ public:
         return through > T(0) ? through : T(0);
     }
 
-    /// Point, normal, material and texture coordinates of a hit of `ray`.
+    /// Point, normals, material, texture coordinates and colour of a hit of `ray`.
     [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const Hit<T>& hit) const {
         SurfacePoint<T> sp{};
         sp.point = ray.at(hit.t);
+        sp.shading_point = sp.point;
+        sp.tint = {T(1), T(1), T(1)};
         if (hit.geometry >= kinds) { // a placed mesh
             const Instance& inst = instances_.at(hit.geometry - kinds);
-            const MeshEntry& m = meshes_[inst.mesh];
-            const auto& k = m.mesh->indices.at(hit.primitive);
+            const Mesh<T>& mesh = *meshes_[inst.mesh].mesh;
+            const auto& k = mesh.indices.at(hit.primitive);
+            const Triangle<T> tri = mesh.triangle(hit.primitive);
             // §2 normal of the mesh's triangle (out of its clockwise face), to world space by the
             // inverse transpose: out of the same side after any transform, mirrors included.
-            sp.normal = normalize(Transform<T>::normal(inst.to_object, normal(m.mesh->triangle(hit.primitive))));
-            sp.material = m.material + (m.mesh->material.empty() ? 0 : m.mesh->material[hit.primitive]);
-            sp.has_texture_coordinates = !m.mesh->uvs.empty();
+            const Vertex<T> geometric = normal(tri);
+            sp.normal = normalize(Transform<T>::normal(inst.to_object, geometric));
+            sp.shading_normal = sp.normal;
+            sp.material = meshes_[inst.mesh].material + (mesh.material.empty() ? 0 : mesh.material[hit.primitive]);
+            const T b[3] = {T(1) - hit.u - hit.v, hit.u, hit.v}; // weights of V0, V1, V2
+            sp.has_texture_coordinates = !mesh.uvs.empty();
             if (sp.has_texture_coordinates) {
-                const auto &a = m.mesh->uvs[k[0]], &b = m.mesh->uvs[k[1]], &c = m.mesh->uvs[k[2]];
-                const T w = T(1) - hit.u - hit.v;
-                sp.st = {w * a[0] + hit.u * b[0] + hit.v * c[0], w * a[1] + hit.u * b[1] + hit.v * c[1]};
+                const auto &a = mesh.uvs[k[0]], &bb = mesh.uvs[k[1]], &c = mesh.uvs[k[2]];
+                sp.st = {b[0] * a[0] + b[1] * bb[0] + b[2] * c[0], b[0] * a[1] + b[1] * bb[1] + b[2] * c[1]};
             }
+            if (!mesh.colors.empty())
+                sp.tint = b[0] * mesh.colors[k[0]] + b[1] * mesh.colors[k[1]] + b[2] * mesh.colors[k[2]];
+            if (!mesh.normals.empty()) smooth_shading(sp, inst, mesh, k, b, tri, geometric, ray);
             return sp;
         }
         for_each_kind([&](auto kind, const auto& vec) {
             if (kind != hit.geometry) return;
             const auto& obj = vec.at(hit.primitive);
             sp.normal = surface_normal(obj.shape, sp.point, hit);
+            sp.shading_normal = sp.normal;
             sp.material = obj.material;
             sp.has_texture_coordinates = texture_coordinates(obj.shape, hit, sp.st);
         });
@@ -553,6 +572,40 @@ private:
         bool identity = true;
         Box<T> box; // in the world
     };
+
+    // Shading normal and shadow-ray point of a hit on a mesh with vertex normals (see SurfacePoint).
+    // `b` are the barycentric weights of the triangle's vertices, `geometric` its §2 normal (object
+    // space). Vertex normals that are zero or not finite leave the geometric normal in place.
+    static void smooth_shading(SurfacePoint<T>& sp, const Instance& inst, const Mesh<T>& mesh,
+                               const std::array<std::uint32_t, 3>& k, const T (&b)[3], const Triangle<T>& tri,
+                               const Vertex<T>& geometric, const Ray<T>& ray) {
+        const Vertex<T>* n[3] = {&mesh.normals[k[0]], &mesh.normals[k[1]], &mesh.normals[k[2]]};
+        const Vertex<T> interpolated = b[0] * *n[0] + b[1] * *n[1] + b[2] * *n[2]; // Phong: blend the normals
+        Vertex<T> shading = normalize(Transform<T>::normal(inst.to_object, interpolated));
+        if (!is_finite(shading) || !(dot(shading, shading) > T(0.5))) return;
+        if (dot(shading, sp.normal) < T(0)) shading = -shading; // authored against the winding: same side
+        sp.shading_normal = shading;
+        // Hanika's shading point, in object space: for each vertex P_i with normal n_i (turned to
+        // the side the ray came from), t_i = (p − P_i) − min(0, (p − P_i)·n_i)·n_i, the vector from
+        // P_i to p lifted onto P_i's tangent plane where p lies below it; p' = Σ b_i·(P_i + t_i).
+        // As Σ b_i·P_i = p, p' = p + lift with lift = −Σ b_i·min(0, (p − P_i)·n_i)·n_i, added to
+        // the point on the ray (p here only serves the dot products).
+        const bool from_front =
+            dot(geometric, inst.identity ? ray.direction : inst.to_object.vector(ray.direction)) < T(0);
+        const Vertex<T> P[3] = {tri.v0, tri.v1, tri.v2};
+        const Vertex<T> p = b[0] * P[0] + b[1] * P[1] + b[2] * P[2];
+        Vertex<T> lift{T(0), T(0), T(0)};
+        for (int i = 0; i < 3; ++i) {
+            Vertex<T> ni = *n[i];
+            if ((dot(ni, geometric) < T(0)) == from_front) ni = -ni; // the normal on the ray's side
+            const T len2 = dot(ni, ni);
+            if (!(len2 > T(0)) || !std::isfinite(len2)) continue;
+            ni = ni / std::sqrt(len2);
+            const T below = std::min(T(0), dot(p - P[i], ni));
+            lift = lift - (b[i] * below) * ni;
+        }
+        if (is_finite(lift)) sp.shading_point = sp.point + (inst.identity ? lift : inst.to_world.vector(lift));
+    }
 
     // The nearest hit among the objects `vec` of kind `kind` through their Bvh, nearer than t
     // (which it lowers), into `best`.

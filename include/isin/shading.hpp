@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "color.hpp"
+#include "texture.hpp"
 #include "vec.hpp"
 
 namespace isin {
@@ -14,6 +15,8 @@ namespace isin {
 /// final = (1 − reflectivity − transparency)·local + reflectivity·reflected + transparency·transmitted.
 /// With ior = 1 a transparent surface lets the ray straight through, as the note says; any other
 /// index of refraction bends it by Snell's law. `texture` indexes the scene's textures (−1: none).
+/// Beyond the note: a highlight colour, an ambient colour and a texture filter of its own, for
+/// materials from .mtl files (load_model).
 template <class T>
 struct Material {
     static_assert(std::is_floating_point_v<T>, "isin::Material needs a floating-point type");
@@ -24,6 +27,12 @@ struct Material {
     T transparency = T(0);                   // §8: weight of the transmitted colour, [0,1]
     T ior = T(1);                            // §8: index of refraction; 1 = straight through
     int texture = -1;                        // §10: index into the scene's textures, −1 = none
+    /// Colour of the highlight (§7 uses white; a .mtl file's Ks).
+    Color<T> specular_color{T(1), T(1), T(1)};
+    /// Tint of the ambient term (§7: ka·object colour; white keeps the note's), a .mtl file's Ka.
+    Color<T> ambient_color{T(1), T(1), T(1)};
+    /// How this material's texture is read; none = the scene's texture_filter.
+    std::optional<Filter> texture_filter;
 };
 
 /// A point light with a colour (white by default).
@@ -69,8 +78,8 @@ template <class T>
                                           const Vertex<T>& L, const Vertex<T>& V, const Color<T>& light) noexcept {
     const T NdotL = diffuse_coefficient(N, L);
     if (NdotL <= T(0)) return {T(0), T(0), T(0)};
-    return (m.kd * NdotL * object + m.ks * specular_coefficient(N, L, V, m.shininess) * Color<T>{T(1), T(1), T(1)}) *
-           light; // §7: kd·diffuse + ks·specular
+    return (m.kd * NdotL * object + m.ks * specular_coefficient(N, L, V, m.shininess) * m.specular_color) *
+           light; // §7: kd·diffuse + ks·specular (a white highlight unless the material says otherwise)
 }
 
 /// Refracted direction by Snell's law (§8), n1 sin θ1 = n2 sin θ2, for a unit direction d and a

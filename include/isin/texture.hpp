@@ -105,23 +105,31 @@ private:
     }
 };
 
-/// A texture made from an Image: texel = byte / 255 per channel, linear (no gamma decoding).
+/// A texture made from an Image: texel = byte / 255 per channel (ColorEncoding::linear, the
+/// note's convention and the default), or the sRGB curve decoded to linear intensities
+/// (ColorEncoding::srgb: what photographs and painted textures hold; use it with
+/// RenderOptions::encoding = srgb).
 template <class T>
 class ImageTexture {
     static_assert(std::is_floating_point_v<T>, "isin::ImageTexture needs a floating-point type");
 
 public:
     /// Copies and converts `image`.
-    explicit ImageTexture(const Image& image) : width_(image.width()), height_(image.height()) {
+    explicit ImageTexture(const Image& image, ColorEncoding encoding = ColorEncoding::linear)
+        : width_(image.width()), height_(image.height()), encoding_(encoding) {
+        std::array<T, 256> value{}; // the 256 byte values decoded once
+        for (int i = 0; i < 256; ++i)
+            value[std::size_t(i)] = encoding == ColorEncoding::srgb ? srgb_to_linear(T(i) / T(255)) : T(i) / T(255);
         texels_.reserve(image.pixels().size());
-        for (const Rgb8& p : image.pixels()) texels_.push_back(from_rgb8<T>(p.r, p.g, p.b));
+        for (const Rgb8& p : image.pixels()) texels_.push_back({value[p.r], value[p.g], value[p.b]});
     }
-
     /// Loads a PNG, JPEG or PPM file via read_image; throws as read_image does.
-    [[nodiscard]] static ImageTexture load(const std::string& path, const ReadLimits& limits = {}) {
-        return ImageTexture(read_image(path, limits));
+    [[nodiscard]] static ImageTexture load(const std::string& path, const ReadLimits& limits = {},
+                                           ColorEncoding encoding = ColorEncoding::linear) {
+        return ImageTexture(read_image(path, limits), encoding);
     }
-
+    /// How the bytes were decoded.
+    [[nodiscard]] ColorEncoding encoding() const noexcept { return encoding_; }
     [[nodiscard]] T width() const noexcept { return T(width_); }
     [[nodiscard]] T height() const noexcept { return T(height_); }
 
@@ -137,6 +145,7 @@ public:
 
 private:
     int width_, height_;
+    ColorEncoding encoding_;
     std::vector<Color<T>> texels_;
 };
 

@@ -1,14 +1,23 @@
 #pragma once
 /// isin — private: the code of mesh.hpp, compiled where ISIN_IMPLEMENTATION is defined (one
 /// translation unit of a program, or CMake's isin::io), for T = float and double.
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <exception>
+#include <limits>
+#include <unordered_map>
+#include <utility>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <vector>
 
 #include "../mesh.hpp"
+#include "../model.hpp"
 #include "../read_limits.hpp"
 #include "../triangle.hpp"
 #include "mesh_text.hpp"
@@ -30,7 +39,242 @@ template <class T>
 
 } // namespace detail
 
-/// Triangles of a Wavefront OBJ file (`v` and `f` statements; polygons as fans, winding kept).
+namespace detail {
+
+#if ISIN_HAVE_TINYOBJLOADER
+
+/// An OBJ vertex: its v, vt and vn indices (−1: none), as one key.
+struct ObjVertexKey {
+    std::int32_t v, vt, vn;
+    bool operator==(const ObjVertexKey& o) const noexcept { return v == o.v && vt == o.vt && vn == o.vn; }
+};
+struct ObjVertexKeyHash {
+    std::size_t operator()(const ObjVertexKey& k) const noexcept {
+        std::uint64_t h = static_cast<std::uint32_t>(k.v);
+        h = h * 0x9E3779B97F4A7C15ull ^ static_cast<std::uint32_t>(k.vt);
+        h = h * 0x9E3779B97F4A7C15ull ^ static_cast<std::uint32_t>(k.vn);
+        return static_cast<std::size_t>(h ^ (h >> 29));
+    }
+};
+
+/// A colour from a .mtl file: non-finite or negative channels read as 0.
+template <class T>
+[[nodiscard]] inline Color<T> mtl_color(const tobj::real_t* c) noexcept {
+    const auto channel = [](tobj::real_t x) {
+        const auto v = static_cast<double>(x);
+        return std::isfinite(v) && v > 0 ? static_cast<T>(std::min(v, 1e6)) : T(0);
+    };
+    return {channel(c[0]), channel(c[1]), channel(c[2])};
+}
+
+/// isin's material for a .mtl material (see model.hpp for the mapping).
+template <class T>
+[[nodiscard]] inline Material<T> mtl_material(const tobj::material_t& t) {
+    Material<T> m;
+    m.color = mtl_color<T>(t.diffuse);
+    m.ambient_color = mtl_color<T>(t.ambient);
+    m.specular_color = mtl_color<T>(t.specular);
+    m.ka = m.kd = m.ks = T(1); // the colours carry the weights
+    const auto shininess = static_cast<double>(t.shininess);
+    m.shininess = std::isfinite(shininess) && shininess > 0 ? static_cast<T>(std::min(shininess, 1e4)) : T(0);
+    const auto dissolve = static_cast<double>(t.dissolve);
+    m.transparency = std::isfinite(dissolve) ? T(1) - static_cast<T>(std::clamp(dissolve, 0.0, 1.0)) : T(0);
+    const auto ior = static_cast<double>(t.ior);
+    m.ior = std::isfinite(ior) && ior > 0 && ior < 100 ? static_cast<T>(ior) : T(1);
+    if (t.illum >= 3 && t.illum <= 7) // ray-traced reflection (3–7 in the MTL specification)
+        m.reflectivity = std::min(T(1), (m.specular_color.r + m.specular_color.g + m.specular_color.b) / T(3));
+    return m;
+}
+
+/// A texture path from a .mtl file as a path on this system: '\' as '/'; tried as written, then
+/// with its file name in any letter case (files made on Windows). "" if there is none.
+inline std::string mtl_texture_file(const std::string& dir, std::string name) {
+    std::replace(name.begin(), name.end(), '\\', '/');
+    std::error_code ec;
+    const std::filesystem::path path = std::filesystem::path(dir) / name;
+    if (std::filesystem::is_regular_file(path, ec)) return path.string();
+    const auto lower = [](std::string s) {
+        for (char& ch : s)
+            if (ch >= 'A' && ch <= 'Z') ch = static_cast<char>(ch - 'A' + 'a');
+        return s;
+    };
+    const std::string wanted = lower(path.filename().string());
+    std::filesystem::directory_iterator it(path.parent_path().empty() ? "." : path.parent_path(), ec), end;
+    for (int seen = 0; !ec && it != end && seen < 100000; it.increment(ec), ++seen)
+        if (lower(it->path().filename().string()) == wanted && it->is_regular_file(ec)) return it->path().string();
+    return "";
+}
+
+/// Builds the meshes of an OBJ: one per part (group or object name with faces), vertices shared
+/// within a mesh when their v/vt/vn triples agree, polygons triangulated.
+template <class T>
+inline void obj_build_meshes(const ObjCollector<T>& c, Model<T>& model) {
+    const std::size_t parts = c.part_names.size();
+    std::vector<std::size_t> faces_in(parts + 1, 0); // counting sort of faces by part, file order kept
+    for (const auto& f : c.faces) ++faces_in[f.part + 1];
+    for (std::size_t p = 0; p < parts; ++p) faces_in[p + 1] += faces_in[p];
+    std::vector<std::size_t> order(c.faces.size()), first_corner(c.faces.size());
+    {
+        std::vector<std::size_t> next(faces_in.begin(), faces_in.end() - 1);
+        std::size_t at = 0;
+        for (std::size_t f = 0; f < c.faces.size(); ++f) {
+            first_corner[f] = at;
+            at += c.faces[f].corners;
+            order[next[c.faces[f].part]++] = f;
+        }
+    }
+    bool any_material = false;
+    for (const auto& f : c.faces) any_material = any_material || f.material >= 0;
+
+    std::vector<std::uint32_t> by_position(c.vertices.size(), std::numeric_limits<std::uint32_t>::max());
+    std::unordered_map<ObjVertexKey, std::uint32_t, ObjVertexKeyHash> by_key;
+    std::vector<std::uint32_t> local;
+    std::vector<FanRun> runs;
+    for (std::size_t p = 0; p < parts; ++p) {
+        if (faces_in[p] == faces_in[p + 1]) continue;
+        Mesh<T> mesh;
+        bool has_uv = false, has_normal = false;
+        for (std::size_t i = faces_in[p]; i < faces_in[p + 1]; ++i)
+            for (std::uint32_t k = 0; k < c.faces[order[i]].corners; ++k) {
+                const auto& corner = c.corners[first_corner[order[i]] + k];
+                has_uv = has_uv || corner.vt >= 0;
+                has_normal = has_normal || corner.vn >= 0;
+            }
+        const bool by_v = !has_uv && !has_normal; // positions alone: a flat table, no hashing
+        by_key.clear();
+        runs.clear();
+        for (std::size_t i = faces_in[p]; i < faces_in[p + 1]; ++i) {
+            const auto& face = c.faces[order[i]];
+            local.resize(face.corners);
+            for (std::uint32_t k = 0; k < face.corners; ++k) {
+                const auto& corner = c.corners[first_corner[order[i]] + k];
+                const auto next = static_cast<std::uint32_t>(mesh.positions.size());
+                std::uint32_t& slot = by_v ? by_position[static_cast<std::size_t>(corner.v)]
+                                           : by_key.try_emplace({corner.v, corner.vt, corner.vn}, next).first->second;
+                if (by_v ? slot == std::numeric_limits<std::uint32_t>::max() : slot == next) {
+                    slot = next;
+                    mesh.positions.push_back(c.vertices[static_cast<std::size_t>(corner.v)]);
+                    if (has_uv)
+                        mesh.uvs.push_back(corner.vt >= 0 ? c.uvs[static_cast<std::size_t>(corner.vt)]
+                                                          : std::array<T, 2>{T(0), T(0)});
+                    if (has_normal) // a corner without a normal: zero, read as "use the face's normal"
+                        mesh.normals.push_back(corner.vn >= 0 ? c.normals[static_cast<std::size_t>(corner.vn)]
+                                                              : Vertex<T>{T(0), T(0), T(0)});
+                }
+                local[k] = slot;
+            }
+            const std::size_t before = mesh.indices.size();
+            obj_add_fan(mesh.indices, runs, local.data(), face.corners);
+            if (any_material)
+                mesh.material.insert(mesh.material.end(), mesh.indices.size() - before,
+                                     static_cast<std::uint32_t>(face.material + 1));
+        }
+        if (by_v) // reset the table for the next part
+            for (std::size_t i = faces_in[p]; i < faces_in[p + 1]; ++i)
+                for (std::uint32_t k = 0; k < c.faces[order[i]].corners; ++k)
+                    by_position[static_cast<std::size_t>(c.corners[first_corner[order[i]] + k].v)] =
+                        std::numeric_limits<std::uint32_t>::max();
+        retriangulate_fans(mesh.positions, mesh.indices, runs);
+        model.meshes.push_back(std::move(mesh));
+        model.names.push_back(c.part_names[p]);
+    }
+}
+
+template <class T>
+[[nodiscard]] Model<T> parse_obj_model(const char* who, const std::string& path, std::string_view text,
+                                       const ModelOptions& options) {
+    ObjCollector<T> c;
+    const std::size_t slash = path.find_last_of('/');
+    obj_collect<T>(who, path, text, c, slash == std::string::npos ? "" : path.substr(0, slash + 1), &options.limits);
+    Model<T> model;
+    obj_build_meshes(c, model);
+    Material<T> fallback;
+    fallback.color = {T(0.8), T(0.8), T(0.8)};
+    model.materials.push_back(fallback);
+    model.material_names.emplace_back();
+    std::vector<std::pair<std::string, int>> loaded; // texture file → index
+    for (std::size_t i = 0; i < c.materials.size(); ++i) {
+        const tobj::material_t& t = c.materials[i];
+        Material<T> m = mtl_material<T>(t);
+        if (options.load_textures && !t.diffuse_texname.empty()) {
+            const std::string file =
+                mtl_texture_file(i < c.material_dirs.size() ? c.material_dirs[i] : "", t.diffuse_texname);
+            auto found = std::find_if(loaded.begin(), loaded.end(), [&](const auto& l) { return l.first == file; });
+            if (file.empty()) {
+                c.warnings.push_back("texture '" + t.diffuse_texname.substr(0, 200) + "' of material '" +
+                                     t.name.substr(0, 80) + "' not found");
+            } else if (found != loaded.end()) {
+                m.texture = found->second;
+            } else {
+                try {
+                    model.textures.emplace_back(ImageTexture<T>::load(file, options.limits, options.textures));
+                    model.texture_paths.push_back(file);
+                    m.texture = static_cast<int>(model.textures.size() - 1);
+                    loaded.emplace_back(file, m.texture);
+                } catch (const std::exception& e) {
+                    c.warnings.push_back(std::string("texture of material '") + t.name.substr(0, 80) +
+                                         "': " + e.what());
+                    loaded.emplace_back(file, -1);
+                }
+            }
+        }
+        model.materials.push_back(m);
+        model.material_names.push_back(t.name);
+    }
+    model.warnings = std::move(c.warnings);
+    return model;
+}
+
+#endif // ISIN_HAVE_TINYOBJLOADER
+
+template <class T>
+[[nodiscard]] Model<T> parse_ply_model(const char* who, const std::string& path, std::string_view file) {
+    Model<T> model;
+    model.meshes.push_back(parse_ply_mesh<T>(who, path, file));
+    model.names.push_back(std::filesystem::path(path).stem().string());
+    Material<T> fallback;
+    fallback.color = {T(0.8), T(0.8), T(0.8)};
+    model.materials.push_back(fallback);
+    model.material_names.emplace_back();
+    return model;
+}
+
+[[nodiscard]] inline std::string lower_extension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& ch : ext)
+        if (ch >= 'A' && ch <= 'Z') ch = static_cast<char>(ch - 'A' + 'a');
+    return ext;
+}
+
+} // namespace detail
+
+template <class T>
+Model<T> load_model(const std::string& path, const ModelOptions& options) {
+    static_assert(std::is_floating_point_v<T>, "isin::load_model needs a floating-point type");
+    const char* who = "isin::load_model";
+    const std::string ext = detail::lower_extension(path);
+    Model<T> model;
+    if (ext == ".ply") {
+        model = detail::parse_ply_model<T>(who, path, detail::mesh_read_file(who, path, options.limits));
+    } else if (ext == ".obj") {
+#if ISIN_HAVE_TINYOBJLOADER
+        model = detail::parse_obj_model<T>(who, path, detail::mesh_read_file(who, path, options.limits), options);
+#else
+        throw std::runtime_error(std::string(who) + ": '" + path +
+                                 "': reading OBJ needs tinyobjloader "
+                                 "(Debian/Ubuntu: install libtinyobjloader-dev); PLY works without it");
+#endif
+    } else {
+        throw std::invalid_argument(std::string(who) + ": '" + path + "': unknown extension '" + ext +
+                                    "' (use .obj or .ply)");
+    }
+    if (options.compute_normals)
+        for (Mesh<T>& mesh : model.meshes)
+            if (mesh.normals.empty()) compute_normals(mesh, static_cast<T>(options.crease_angle_degrees));
+    return model;
+}
+
+/// Triangles of a Wavefront OBJ file (`v` and `f` statements; polygons triangulated, winding kept).
 /// Only regular files of at most limits.max_file_bytes are read. Throws MeshError naming the
 /// file and line; std::runtime_error without tinyobjloader.
 template <class T>
@@ -39,8 +283,9 @@ std::vector<Triangle<T>> load_obj(const std::string& path, const ReadLimits& lim
     return detail::parse_obj<T>(who, path, detail::mesh_read_file(who, path, limits));
 }
 
-/// Triangles of a PLY file: ascii or binary_little_endian 1.0, positions from vertex x, y, z
-/// (any scalar type), polygons from face vertex_indices (or vertex_index) as fans, winding kept.
+/// Triangles of a PLY file: ascii or binary (either byte order) 1.0, positions from vertex x, y, z
+/// (any scalar type), polygons from face vertex_indices (or vertex_index), triangulated with
+/// their winding kept.
 /// Only regular files of at most limits.max_file_bytes are read. Throws MeshError naming the
 /// file and line (ASCII) or byte offset (binary).
 template <class T>
@@ -64,9 +309,7 @@ std::vector<Triangle<T>> load_mesh_from_memory(const void* data, std::size_t siz
 /// Throws std::invalid_argument naming the path for any other extension, else as load_obj/ply.
 template <class T>
 std::vector<Triangle<T>> load_mesh(const std::string& path, const ReadLimits& limits) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& ch : ext)
-        if (ch >= 'A' && ch <= 'Z') ch = static_cast<char>(ch - 'A' + 'a');
+    const std::string ext = detail::lower_extension(path);
     if (ext == ".obj") return load_obj<T>(path, limits);
     if (ext == ".ply") return load_ply<T>(path, limits);
     throw std::invalid_argument("isin::load_mesh: '" + path + "': unknown extension '" + ext + "' (use .obj or .ply)");
@@ -77,7 +320,8 @@ std::vector<Triangle<T>> load_mesh(const std::string& path, const ReadLimits& li
     template std::vector<Triangle<T>> load_ply<T>(const std::string&, const ReadLimits&);                              \
     template std::vector<Triangle<T>> load_mesh_from_memory<T>(const void*, std::size_t, MeshFormat,                   \
                                                                const std::string&);                                    \
-    template std::vector<Triangle<T>> load_mesh<T>(const std::string&, const ReadLimits&);
+    template std::vector<Triangle<T>> load_mesh<T>(const std::string&, const ReadLimits&);                             \
+    template Model<T> load_model<T>(const std::string&, const ModelOptions&);
 ISIN_DETAIL_MESH_IO(float)
 ISIN_DETAIL_MESH_IO(double)
 #undef ISIN_DETAIL_MESH_IO

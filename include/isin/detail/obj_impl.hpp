@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <cstring>
 #include <istream>
+#include <map>
+#include <memory>
 #include <limits>
 #include <streambuf>
 #include <string>
@@ -15,6 +17,8 @@
 
 #include "../mesh.hpp"
 #include "mesh_text.hpp"
+#include "file.hpp"
+#include "polygon.hpp"
 #include "tinyobj.hpp"
 
 namespace isin {
@@ -209,15 +213,38 @@ public:
     }
 };
 
-/// What tinyobjloader's callbacks collect: vertices, fan triangles as 0-based indices, and the
-/// first problem (statement kind and ordinal; its line is looked up only if there is one).
+// Internal linkage, as tinyobjloader's types in them (see tinyobj.hpp).
+namespace {
+
+/// What tinyobjloader's callbacks collect: positions, normals, texture coordinates, each face's
+/// corners (0-based, resolved as far as the file allows at that point), part and material, the
+/// materials of the .mtl files, and the first problem (statement kind and ordinal; its line is
+/// looked up only if there is one).
 template <class T>
 struct ObjCollector {
-    std::vector<Vertex<T>> vertices;
-    std::vector<std::array<std::size_t, 3>> triangles;
-    std::vector<std::pair<std::size_t, long long>> forward; // (face, index) beyond vertices so far
-    std::vector<std::size_t> redo;                          // vertices whose value tinyobjloader got wrong, in order
-    std::size_t faces = 0;
+    /// A face corner: indices into vertices, uvs and normals; −1 for "none". A positive index may
+    /// be ≥ the count read so far (OBJ lets faces refer to later vertices): checked at the end.
+    struct Corner {
+        std::int32_t v, vt, vn;
+    };
+    struct Face {
+        std::uint32_t corners; // how many, after those of the faces before it
+        std::uint32_t part;    // index into part_names
+        std::int32_t material; // tinyobjloader's material id, −1 = none
+    };
+    bool attributes = true; // false: normals and uvs only counted (load_obj reads positions only)
+    std::vector<Vertex<T>> vertices, normals;
+    std::vector<std::array<T, 2>> uvs;
+    std::size_t normal_count = 0, uv_count = 0;
+    std::vector<Corner> corners;
+    std::vector<Face> faces;
+    std::vector<std::string> part_names{std::string()};
+    std::uint32_t part = 0;
+    std::int32_t material = -1;
+    std::vector<tobj::material_t> materials; // all .mtl files' materials so far
+    std::vector<std::string> material_dirs;  // the directory of each material's .mtl (texture paths)
+    std::vector<std::string> warnings;
+    std::vector<std::size_t> redo; // vertices whose value tinyobjloader got wrong, in order
     char bad_kind = 0;
     std::size_t bad_ordinal = 0;
     std::string bad_why;
@@ -227,6 +254,12 @@ struct ObjCollector {
         bad_kind = kind;
         bad_ordinal = ordinal;
         bad_why = std::move(why);
+    }
+
+    /// An attribute value as T: non-finite values and values beyond T read as 0.
+    [[nodiscard]] static T attribute(tobj::real_t x) noexcept {
+        const auto v = static_cast<double>(x);
+        return mesh_fits<T>(v) ? static_cast<T>(v) : T(0);
     }
 
     static void on_vertex(void* self, tobj::real_t x, tobj::real_t y, tobj::real_t z, tobj::real_t) {
@@ -242,91 +275,237 @@ struct ObjCollector {
         c.redo.push_back(k);
         c.vertices.push_back({T(0), T(0), T(0)});
     }
+    static void on_normal(void* self, tobj::real_t x, tobj::real_t y, tobj::real_t z) {
+        auto& c = *static_cast<ObjCollector*>(self);
+        ++c.normal_count;
+        if (c.attributes) c.normals.push_back({attribute(x), attribute(y), attribute(z)});
+    }
+    static void on_texcoord(void* self, tobj::real_t x, tobj::real_t y, tobj::real_t) {
+        auto& c = *static_cast<ObjCollector*>(self);
+        ++c.uv_count;
+        if (c.attributes) c.uvs.push_back({attribute(x), attribute(y)});
+    }
+    static void on_group(void* self, const char** names, int count) {
+        auto& c = *static_cast<ObjCollector*>(self);
+        std::string name;
+        for (int i = 0; i < count; ++i) name += (i ? " " : "") + std::string(names[i]);
+        c.set_part(name);
+    }
+    static void on_object(void* self, const char* name) { static_cast<ObjCollector*>(self)->set_part(name); }
+    static void on_usemtl(void* self, const char* name, int id) {
+        auto& c = *static_cast<ObjCollector*>(self);
+        c.material = id;
+        if (id < 0) c.warnings.push_back("material '" + std::string(name).substr(0, 80) + "' is not defined");
+    }
+    static void on_mtllib(void* self, const tobj::material_t* m, int count) {
+        auto& c = *static_cast<ObjCollector*>(self);
+        c.materials.assign(m, m + count);
+    }
+    void set_part(const std::string& name) {
+        for (std::size_t i = 0; i < part_names.size(); ++i) // few parts in real files; a map if that changes
+            if (part_names[i] == name) {
+                part = static_cast<std::uint32_t>(i);
+                return;
+            }
+        part_names.push_back(name);
+        part = static_cast<std::uint32_t>(part_names.size() - 1);
+    }
 
     static void on_face(void* self, tobj::index_t* indices, int n) {
         auto& c = *static_cast<ObjCollector*>(self);
-        const std::size_t face = c.faces++;
+        const std::size_t face = c.faces.size();
+        c.faces.push_back({static_cast<std::uint32_t>(n < 0 ? 0 : n), c.part, c.material});
         if (c.bad_kind) return;
         if (n < 3) return c.fail('f', face, "face has " + std::to_string(n) + " vertices, needs at least 3");
-        const std::size_t count = c.vertices.size();
-        bool ok = true;
-        const auto resolve = [&](int raw) -> std::size_t {
+        // Resolves one index; `what` names it, `count` is how many were read so far.
+        const auto resolve = [&](int raw, const char* what, std::size_t count, bool optional) -> std::int32_t {
             if (raw == 0) {
-                c.fail('f', face, "vertex index 0 is invalid (OBJ counts from 1)");
-                ok = false;
-                return 0;
+                if (!optional) c.fail('f', face, std::string(what) + " index 0 is invalid (OBJ counts from 1)");
+                return -1;
             }
-            if (raw < 0) { // relative: −1 is the last vertex read so far
+            if (raw < 0) { // relative: −1 is the last one read so far
                 const auto back = static_cast<std::size_t>(-static_cast<long long>(raw));
                 if (back > count) {
                     c.fail('f', face,
-                           "vertex index " + std::to_string(raw) + " is out of range (" + std::to_string(count) +
-                               " vertices precede it)");
-                    ok = false;
-                    return 0;
+                           std::string(what) + " index " + std::to_string(raw) + " is out of range (" +
+                               std::to_string(count) + " precede it)");
+                    return -1;
                 }
-                return count - back;
+                return static_cast<std::int32_t>(count - back);
             }
-            const auto index = static_cast<std::size_t>(raw) - 1;
-            if (index >= count) c.forward.emplace_back(face, raw); // checked once all are read
-            return index;
+            return raw - 1;
         };
-        // Fan (v0, vi, vi+1): the polygon's winding is kept.
-        const std::size_t v0 = resolve(indices[0].vertex_index);
-        std::size_t prev = resolve(indices[1].vertex_index);
-        for (int i = 2; i < n && ok; ++i) {
-            const std::size_t cur = resolve(indices[i].vertex_index);
-            c.triangles.push_back({v0, prev, cur});
-            prev = cur;
+        for (int i = 0; i < n; ++i) {
+            const tobj::index_t& k = indices[i];
+            c.corners.push_back({resolve(k.vertex_index, "vertex", c.vertices.size(), false),
+                                 resolve(k.texcoord_index, "texture coordinate", c.uv_count, true),
+                                 resolve(k.normal_index, "normal", c.normal_count, true)});
+        }
+    }
+
+    /// After parsing: the first face (in file order, before any earlier problem) whose index is
+    /// beyond what the file holds becomes the problem.
+    void check_ranges() {
+        std::size_t at = 0;
+        for (std::size_t f = 0; f < faces.size(); ++f) {
+            if (bad_kind && bad_ordinal <= f) return;
+            for (std::uint32_t i = 0; i < faces[f].corners; ++i) {
+                const Corner& k = corners[at + i];
+                const auto beyond = [&](std::int32_t index, std::size_t count, const char* what, const char* things) {
+                    if (index < 0 || static_cast<std::size_t>(index) < count) return false;
+                    bad_kind = 0;
+                    fail('f', f,
+                         std::string(what) + " index " + std::to_string(static_cast<long long>(index) + 1) +
+                             " is out of range (the file has " + std::to_string(count) + " " + things + ")");
+                    return true;
+                };
+                if (beyond(k.v, vertices.size(), "vertex", "vertices") ||
+                    beyond(k.vt, uv_count, "texture coordinate", "texture coordinates") ||
+                    beyond(k.vn, normal_count, "normal", "normals"))
+                    return;
+            }
+            at += faces[f].corners;
         }
     }
 };
 
-#endif // ISIN_HAVE_TINYOBJLOADER
-
+/// Reads .mtl files for tinyobjloader with isin's file checks (regular files within the limits)
+/// and number checks; a file that cannot be read is a warning, a malformed one an error.
 template <class T>
-[[nodiscard]] inline std::vector<Triangle<T>> mesh_triangles(const std::vector<Vertex<T>>& vertices,
-                                                             const std::vector<std::array<std::size_t, 3>>& tris) {
-    std::vector<Triangle<T>> out;
-    out.reserve(tris.size());
-    for (const auto& t : tris) out.push_back({vertices[t[0]], vertices[t[1]], vertices[t[2]]});
-    return out;
+class ObjMaterialReader : public tobj::MaterialReader {
+public:
+    ObjMaterialReader(std::string dir, const ReadLimits& limits, ObjCollector<T>& collector)
+        : dir_(std::move(dir)), limits_(limits), c_(collector) {}
+
+    std::string error; // the first malformed .mtl, as a message naming it
+
+    bool operator()(const std::string& name, std::vector<tobj::material_t>* materials,
+                    std::map<std::string, int>* names, std::string*, std::string*) override {
+        const std::string path = dir_ + name;
+        std::string text;
+        const std::string why = read_whole_file(path, text, limits_);
+        if (!why.empty()) {
+            c_.warnings.push_back("material file '" + path + "': " + why);
+            return false;
+        }
+        // tinyobjloader's number parser must not see what isin refuses in OBJ text (see
+        // obj_unsafe_number); other malformed numbers it reads as 0, as assimp does.
+        std::string unsafe;
+        obj_for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
+            const char *tb = nullptr, *te = nullptr;
+            while (obj_token(b, e, tb, te)) {
+                const std::string bad = obj_unsafe_number(tb, te);
+                if (!bad.empty()) {
+                    unsafe = "line " + std::to_string(line) + ": " + bad;
+                    return false;
+                }
+            }
+            return true;
+        });
+        if (!unsafe.empty()) {
+            if (error.empty()) error = "'" + path + "': " + unsafe;
+            return false;
+        }
+        ObjTextBuf buf(text);
+        std::istream in(&buf);
+        std::string warn, err;
+        const std::size_t before = materials->size();
+        tobj::LoadMtl(names, materials, &in, &warn, &err);
+        const std::size_t slash = path.find_last_of('/');
+        c_.material_dirs.resize(before, dir_);
+        c_.material_dirs.resize(materials->size(), slash == std::string::npos ? "" : path.substr(0, slash + 1));
+        return true;
+    }
+
+private:
+    std::string dir_;
+    const ReadLimits& limits_;
+    ObjCollector<T>& c_;
+};
+
+} // namespace
+
+/// Parses OBJ text into `c`, after isin's own checks; throws MeshError for any problem.
+/// `dir` (ending in '/', or "") is where .mtl files are looked for; null `limits`: none read.
+template <class T>
+inline void obj_collect(const char* who, const std::string& name, std::string_view text, ObjCollector<T>& c,
+                        const std::string& dir, const ReadLimits* limits) {
+    // A NUL byte: UTF-16 text or binary data, which tinyobjloader would read as nothing.
+    if (const void* nul = std::memchr(text.data(), 0, text.size())) {
+        const auto at = static_cast<std::size_t>(static_cast<const char*>(nul) - text.data());
+        const bool utf16 = text.size() >= 2 && ((text[0] == '\xff' && text[1] == '\xfe') ||
+                                                (text[0] == '\xfe' && text[1] == '\xff') || at < 2);
+        throw mesh_error(who, name,
+                         utf16 ? std::string("UTF-16 text; OBJ files are read as ASCII or UTF-8 (save it as UTF-8)")
+                               : "binary data (a NUL byte at offset " + std::to_string(at) + "), not OBJ text");
+    }
+    if (text.size() >= 3 && text.substr(0, 3) == "\xef\xbb\xbf") text.remove_prefix(3); // UTF-8 byte order mark
+    obj_check_text<T>(who, name, text);
+    tobj::callback_t callbacks;
+    callbacks.vertex_cb = &ObjCollector<T>::on_vertex;
+    callbacks.index_cb = &ObjCollector<T>::on_face;
+    callbacks.normal_cb = &ObjCollector<T>::on_normal;
+    callbacks.texcoord_cb = &ObjCollector<T>::on_texcoord;
+    c.attributes = limits != nullptr;
+    if (limits) {
+        callbacks.group_cb = &ObjCollector<T>::on_group;
+        callbacks.object_cb = &ObjCollector<T>::on_object;
+        callbacks.usemtl_cb = &ObjCollector<T>::on_usemtl;
+        callbacks.mtllib_cb = &ObjCollector<T>::on_mtllib;
+    }
+    ObjTextBuf buf(text);
+    std::istream in(&buf);
+    std::string warn, err;
+    std::unique_ptr<ObjMaterialReader<T>> mtl;
+    if (limits) mtl = std::make_unique<ObjMaterialReader<T>>(dir, *limits, c);
+    // Without a reader, mtllib lines are skipped and no .mtl file is opened.
+    const bool ok = tobj::LoadObjWithCallback(in, callbacks, &c, mtl.get(), &warn, &err);
+    if (mtl && !mtl->error.empty()) throw mesh_error(who, name, "material file " + mtl->error);
+    if (!ok || !err.empty())
+        throw mesh_error(who, name, "tinyobjloader: " + (err.empty() ? std::string("failed") : err));
+    c.check_ranges();
+    const auto at_line = [&](char kind, std::size_t ordinal, const std::string& why) {
+        return mesh_error(who, name, "line " + std::to_string(obj_statement_line(text, kind, ordinal)) + ": " + why);
+    };
+    if (c.bad_kind) throw at_line(c.bad_kind, c.bad_ordinal, c.bad_why);
+    if (!c.redo.empty() && !obj_reread_vertices(text, c.redo, c.vertices))
+        throw at_line('v', c.redo.front(), "coordinate out of range for " + std::string(mesh_type_name<T>()));
+    if (c.vertices.size() > std::numeric_limits<std::uint32_t>::max())
+        throw mesh_error(who, name, "more than 2^32 - 1 vertices");
 }
 
+/// Appends face `f`'s fan (corners local[0 … n)) to `mesh`, recording polygons for
+/// retriangulate_fans.
+inline void obj_add_fan(std::vector<std::array<std::uint32_t, 3>>& indices, std::vector<FanRun>& runs,
+                        const std::uint32_t* local, std::uint32_t n) {
+    if (n > 3) runs.push_back({indices.size(), n});
+    for (std::uint32_t k = 1; k + 1 < n; ++k) indices.push_back({local[0], local[k], local[k + 1]});
+}
+
+#endif // ISIN_HAVE_TINYOBJLOADER
 
 template <class T>
 [[nodiscard]] std::vector<Triangle<T>> parse_obj(const char* who, const std::string& name, std::string_view text) {
     static_assert(std::is_floating_point_v<T>, "isin::load_obj needs a floating-point type");
 #if ISIN_HAVE_TINYOBJLOADER
-    obj_check_text<T>(who, name, text);
     ObjCollector<T> c;
-    tobj::callback_t callbacks;
-    callbacks.vertex_cb = &ObjCollector<T>::on_vertex;
-    callbacks.index_cb = &ObjCollector<T>::on_face;
-    ObjTextBuf buf(text);
-    std::istream in(&buf);
-    std::string warn, err;
-    // No MaterialReader: mtllib lines are skipped, no .mtl file is opened.
-    const bool ok = tobj::LoadObjWithCallback(in, callbacks, &c, nullptr, &warn, &err);
-    if (!ok || !err.empty())
-        throw mesh_error(who, name, "tinyobjloader: " + (err.empty() ? std::string("failed") : err));
-
-    const auto at_line = [&](char kind, std::size_t ordinal, const std::string& why) {
-        return mesh_error(who, name, "line " + std::to_string(obj_statement_line(text, kind, ordinal)) + ": " + why);
-    };
-    for (const auto& [face, raw] : c.forward) { // forward references, now that all vertices are in
-        if (static_cast<std::size_t>(raw) <= c.vertices.size()) continue;
-        if (c.bad_kind && c.bad_ordinal < face) break; // report whichever face comes first
-        c.bad_kind = 0;
-        c.fail('f', face,
-               "vertex index " + std::to_string(raw) + " is out of range (the file has " +
-                   std::to_string(c.vertices.size()) + " vertices)");
-        break;
+    obj_collect<T>(who, name, text, c, "", nullptr);
+    std::vector<std::array<std::uint32_t, 3>> indices;
+    indices.reserve(c.corners.size() > 2 * c.faces.size() ? c.corners.size() - 2 * c.faces.size() : 0);
+    std::vector<FanRun> runs;
+    std::vector<std::uint32_t> local;
+    std::size_t at = 0;
+    for (const auto& face : c.faces) {
+        local.resize(face.corners);
+        for (std::uint32_t i = 0; i < face.corners; ++i) local[i] = static_cast<std::uint32_t>(c.corners[at + i].v);
+        obj_add_fan(indices, runs, local.data(), face.corners);
+        at += face.corners;
     }
-    if (c.bad_kind) throw at_line(c.bad_kind, c.bad_ordinal, c.bad_why);
-    if (!c.redo.empty() && !obj_reread_vertices(text, c.redo, c.vertices))
-        throw at_line('v', c.redo.front(), "coordinate out of range for " + std::string(mesh_type_name<T>()));
-    return mesh_triangles(c.vertices, c.triangles);
+    retriangulate_fans(c.vertices, indices, runs);
+    std::vector<Triangle<T>> out;
+    out.reserve(indices.size());
+    for (const auto& t : indices) out.push_back({c.vertices[t[0]], c.vertices[t[1]], c.vertices[t[2]]});
+    return out;
 #else
     (void)text;
     throw std::runtime_error(std::string(who) + ": '" + name +
@@ -334,7 +513,6 @@ template <class T>
                              "(Debian/Ubuntu: install libtinyobjloader-dev); PLY works without it");
 #endif
 }
-
 
 } // namespace detail
 

@@ -1,0 +1,358 @@
+// Models from files (load_model, add_model): OBJ with .mtl materials and textures, groups,
+// normals, uvs, correct polygons, UTF-16 and binary files refused; PLY attributes; smooth shading
+// (shading normal, the shadow-terminator fix) and sRGB output.
+#include <isin/image_io.hpp>
+#include <isin/model.hpp>
+#include <isin/render.hpp>
+
+#include <doctest/doctest.h>
+
+#include "approx.hpp"
+#include "common/workloads.hpp"
+#include "temp_dir.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace {
+
+template <class T>
+T area(const isin::Mesh<T>& mesh) {
+    T sum = T(0);
+    for (std::size_t i = 0; i < mesh.size(); ++i) sum += isin::length(isin::normal(mesh.triangle(i))) / T(2);
+    return sum;
+}
+
+/// What f throws, as text ("" if nothing).
+template <class F>
+std::string thrown(F&& f) {
+    try {
+        f();
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+    return "";
+}
+
+// A house of two groups: a "walls" quad and an L-shaped (concave) hexagon "floor", with uvs and
+// normals, two materials from a .mtl beside it and a texture in a subfolder named with '\'.
+const char* const house_obj = "# two groups\n"
+                              "mtllib house.mtl\n"
+                              "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\n" // L: area 3
+                              "v 0 0 5\nv 4 0 5\nv 4 3 5\nv 0 3 5\n"                   // quad: area 12
+                              "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                              "vn 0 0 -1\nvn 0 0 1\n"
+                              "g floor\nusemtl Brick\n"
+                              "f 1/1/1 6/4/1 5/3/1 4/3/1 3/3/1 2/2/1\n"
+                              "g walls\nusemtl Glass\n"
+                              "f 7/1/2 10/4/2 9/3/2 8/2/2\n";
+const char* const house_mtl = "newmtl Brick\n"
+                              "Ka 0.1 0.2 0.3\nKd 0.5 0.25 0.125\nKs 0.2 0.2 0.2\nNs 40\n"
+                              "map_Kd -s 1 1 1 textures\\Brick.png\n"
+                              "newmtl Glass\n"
+                              "Kd 0.9 0.9 0.9\nKs 0.3 0.6 0.9\nNs 200\nd 0.25\nNi 1.5\nillum 7\n";
+
+void write_texture(const std::string& path) {
+    isin::Image tex(2, 1);
+    tex(0, 0) = {255, 0, 0};
+    tex(1, 0) = {128, 128, 128};
+    isin::write_png(tex, path);
+}
+
+} // namespace
+
+TEST_CASE_TEMPLATE("load_model OBJ: groups as meshes, materials from the .mtl, a texture, uvs, normals", T, float,
+                   double) {
+    TempDir dir("isin-model-");
+    std::filesystem::create_directories(dir.path / "textures");
+    write_texture(dir / "textures/brick.png"); // named Brick.png in the .mtl: found in any letter case
+    dir.put("house.mtl", house_mtl);
+    const auto model = isin::load_model<T>(dir.put("house.obj", house_obj));
+    CAPTURE(model.warnings.size());
+    CHECK(model.warnings.empty());
+    REQUIRE(model.meshes.size() == 2);
+    CHECK(model.names[0] == "floor");
+    CHECK(model.names[1] == "walls");
+    const auto& floor = model.meshes[0];
+    const auto& walls = model.meshes[1];
+    floor.validate();
+    walls.validate();
+    // The concave hexagon: 4 triangles of its own area (a fan from corner 1 would cover 3.5).
+    CHECK(floor.size() == 4);
+    CHECK(area(floor) == approx(T(3)));
+    CHECK(walls.size() == 2);
+    CHECK(area(walls) == approx(T(12)));
+    // Every v/vt/vn triple once: the hexagon's six corners (vt 3 thrice, with three positions).
+    CHECK(floor.positions.size() == 6);
+    CHECK(floor.uvs.size() == 6);
+    REQUIRE(floor.normals.size() == 6);
+    CHECK(floor.normals[0] == isin::Vertex<T>{0, 0, -1});
+    CHECK(walls.normals[0] == isin::Vertex<T>{0, 0, 1});
+    CHECK(walls.uvs[1] == std::array<T, 2>{0, 1}); // second corner: vt 4
+    // Materials: [0] the default, then the .mtl's in order; each triangle names its own.
+    REQUIRE(model.materials.size() == 3);
+    CHECK(model.material_names[1] == "Brick");
+    CHECK(model.material_names[2] == "Glass");
+    CHECK(floor.material == std::vector<std::uint32_t>(4, 1));
+    CHECK(walls.material == std::vector<std::uint32_t>(2, 2));
+    const auto& brick = model.materials[1];
+    CHECK(brick.color.g == approx(T(0.25)));
+    CHECK(brick.ambient_color.b == approx(T(0.3)));
+    CHECK(brick.specular_color.r == approx(T(0.2)));
+    CHECK(brick.shininess == approx(T(40)));
+    CHECK(brick.transparency == T(0));
+    CHECK(brick.reflectivity == T(0)); // illum 2 (default): no mirror
+    const auto& glass = model.materials[2];
+    CHECK(glass.transparency == approx(T(0.75)));
+    CHECK(glass.ior == approx(T(1.5)));
+    CHECK(glass.reflectivity == approx(T(0.6))); // illum 7: the mean of Ks
+    CHECK(glass.texture == -1);
+    REQUIRE(brick.texture == 0);
+    REQUIRE(model.textures.size() == 1);
+    CHECK(model.texture_paths[0].find("brick.png") != std::string::npos);
+    const auto red = isin::sample(model.textures[0], T(0.25), T(0.5), isin::Filter::nearest);
+    CHECK(red.r == T(1));
+    CHECK(red.g == T(0));
+
+    // Into a scene: materials and textures appended after what it has, ids moved along.
+    isin::Scene<T, isin::Sphere> scene;
+    scene.add_material({});
+    scene.add_texture(isin::Checkerboard<T>{});
+    const auto ids = isin::add_model(scene, model);
+    CHECK(ids.size() == 2);
+    CHECK(scene.materials.size() == 4);
+    CHECK(scene.materials[2].texture == 1);
+    CHECK(scene.textures.size() == 2);
+    scene.validate();
+    // A ray down onto the walls' quad from behind it (z > 5) sees the glass material.
+    const isin::Ray<T> ray{{1, 1, 10}, {0, 0, -1}};
+    const auto hit = scene.intersect(ray);
+    REQUIRE(hit);
+    CHECK(scene.surface(ray, hit).material == 3);
+}
+
+TEST_CASE("load_model OBJ: sRGB textures decode to linear intensities") {
+    TempDir dir("isin-model-");
+    std::filesystem::create_directories(dir.path / "textures");
+    write_texture(dir / "textures/Brick.png");
+    dir.put("house.mtl", house_mtl);
+    isin::ModelOptions options;
+    options.textures = isin::ColorEncoding::srgb;
+    const auto model = isin::load_model<double>(dir.put("house.obj", house_obj), options);
+    REQUIRE(model.textures.size() == 1);
+    const auto grey = isin::sample(model.textures[0], 0.75, 0.5, isin::Filter::nearest);
+    CHECK(grey.r == approx(std::pow((128.0 / 255 + 0.055) / 1.055, 2.4))); // 0.2158…
+    CHECK(isin::srgb_to_linear(isin::linear_to_srgb(0.3)) == approx(0.3));
+    CHECK(isin::linear_to_srgb(0.001) == approx(0.01292));
+    CHECK(isin::to_rgb8(isin::Color<double>{0.5, 0, 1}, isin::ColorEncoding::srgb) == isin::Rgb8{188, 0, 255});
+    options.load_textures = false;
+    CHECK(isin::load_model<double>(dir / "house.obj", options).materials[1].texture == -1);
+}
+
+TEST_CASE("load_model OBJ: a missing .mtl or texture is a warning, the geometry still loads") {
+    TempDir dir("isin-model-");
+    auto model = isin::load_model<float>(dir.put("house.obj", house_obj));
+    CHECK(model.triangles() == 6);
+    REQUIRE(model.warnings.size() >= 1);
+    CHECK(model.warnings[0].find("house.mtl") != std::string::npos);
+    dir.put("house.mtl", house_mtl); // names textures\Brick.png, which is not there
+    model = isin::load_model<float>(dir / "house.obj");
+    REQUIRE(model.warnings.size() == 1);
+    CHECK(model.warnings[0].find("Brick.png") != std::string::npos);
+    CHECK(model.materials[1].texture == -1);
+    CHECK(model.materials.size() == 3);
+}
+
+TEST_CASE("load_model OBJ: UTF-16 and binary files are clear errors; a UTF-8 byte order mark is skipped") {
+    TempDir dir("isin-model-");
+    const std::string text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::string utf16le = "\xff\xfe", utf16be = "\xfe\xff", no_bom;
+    for (char ch : text) {
+        utf16le += ch, utf16le += '\0';
+        utf16be += '\0', utf16be += ch;
+        no_bom += ch, no_bom += '\0';
+    }
+    for (const auto& content : {utf16le, utf16be, no_bom}) {
+        const std::string why = thrown([&] { (void)isin::load_model<float>(dir.put("u16.obj", content)); });
+        CHECK(why.find("UTF-16") != std::string::npos);
+        CHECK(thrown([&] { (void)isin::load_mesh<float>(dir / "u16.obj"); }).find("UTF-16") != std::string::npos);
+    }
+    const std::string why = thrown([&] {
+        (void)isin::load_model<float>(dir.put("bin.obj", std::string("v 0 0 0\n\x7f" "ELF\0\0\1", 15)));
+    });
+    CHECK(why.find("binary data (a NUL byte at offset 12)") != std::string::npos);
+    CHECK(isin::load_model<float>(dir.put("bom.obj", "\xef\xbb\xbf" + text)).triangles() == 1);
+}
+
+TEST_CASE_TEMPLATE("load_model OBJ: shared vertices, same group name twice, non-planar polygon, no material", T, float,
+                   double) {
+    TempDir dir("isin-model-");
+    const auto model = isin::load_model<T>(dir.put("parts.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0.5\nv 0 1 0\nv 0.5 0.5 3\n"
+                                                                "o a\nf 1 2 3 4\n"     // non-planar quad
+                                                                "o b\nf 1 2 5\n"       // a second object
+                                                                "o a\nf 3 4 5\n"));    // back to the first
+    REQUIRE(model.meshes.size() == 2);
+    CHECK(model.names[0] == "a");
+    CHECK(model.meshes[0].size() == 3); // the quad's 2 and one more
+    CHECK(model.meshes[0].positions.size() == 5);
+    CHECK(model.meshes[0].material.empty()); // no usemtl anywhere: materials[0] for all
+    CHECK(model.meshes[0].normals.empty());
+    CHECK(model.meshes[1].size() == 1);
+    CHECK(model.meshes[1].positions.size() == 3); // only what its faces use
+    CHECK(model.materials.size() == 1);
+    CHECK(model.warnings.empty());
+
+    isin::ModelOptions options;
+    options.compute_normals = true;
+    const auto smooth = isin::load_model<T>(dir / "parts.obj", options);
+    CHECK(smooth.meshes[0].normals.size() == smooth.meshes[0].positions.size());
+    smooth.meshes[0].validate();
+}
+
+TEST_CASE("load_model: errors name the file; an unknown extension is std::invalid_argument") {
+    TempDir dir("isin-model-");
+    CHECK_THROWS_AS((void)isin::load_model<float>(dir.put("x.stl", "solid")), std::invalid_argument);
+    const std::string why = thrown([&] { (void)isin::load_model<float>(dir.put("bad.obj", "v 0 0 0\nf 1 2 3\n")); });
+    CHECK(why.find("bad.obj") != std::string::npos);
+    CHECK(why.find("line 2") != std::string::npos);
+    const std::string vt = thrown(
+        [&] { (void)isin::load_model<float>(dir.put("vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n")); });
+    CHECK(vt.find("texture coordinate index 2 is out of range") != std::string::npos);
+    // A .mtl whose number tinyobjloader's parser must not see is a clear error naming the .mtl.
+    dir.put("m.mtl", "newmtl a\nKd 1e-2147483648 0 0\n");
+    const std::string mtl = thrown(
+        [&] { (void)isin::load_model<float>(dir.put("m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")); });
+    CHECK(mtl.find("m.mtl") != std::string::npos);
+    CHECK(mtl.find("exponent") != std::string::npos);
+    CHECK_THROWS_AS((void)isin::load_model<float>(dir / "none.obj"), isin::MeshError);
+}
+
+TEST_CASE("load_model PLY: one mesh named after the file, with its normals, uvs and colours") {
+    TempDir dir("isin-model-");
+    const auto model = isin::load_model<float>(dir.put("Tile.ply", "ply\nformat ascii 1.0\n"
+                                                                   "element vertex 3\nproperty float x\n"
+                                                                   "property float y\nproperty float z\n"
+                                                                   "property float nx\nproperty float ny\n"
+                                                                   "property float nz\nproperty float u\n"
+                                                                   "property float v\nproperty uchar red\n"
+                                                                   "property uchar green\nproperty uchar blue\n"
+                                                                   "element face 1\n"
+                                                                   "property list uchar int vertex_indices\n"
+                                                                   "end_header\n"
+                                                                   "0 0 0 0 0 -1 0 0 255 0 0\n"
+                                                                   "0 1 0 0 0 -1 0 1 0 255 0\n"
+                                                                   "1 0 0 0 0 -1 1 0 0 0 255\n"
+                                                                   "3 0 1 2\n"));
+    REQUIRE(model.meshes.size() == 1);
+    CHECK(model.names[0] == "Tile");
+    const auto& mesh = model.meshes[0];
+    CHECK(mesh.size() == 1);
+    CHECK(mesh.normals.size() == 3);
+    CHECK(mesh.uvs.size() == 3);
+    REQUIRE(mesh.colors.size() == 3);
+    CHECK(mesh.colors[1].g == 1.0f);
+    CHECK(model.materials.size() == 1);
+
+    // The vertex colour tints the material's: the hit's colour is the blend of the corners'.
+    isin::Scene<float, isin::Sphere> scene;
+    isin::add_model(scene, model);
+    const isin::Ray<float> ray{{0.25f, 0.25f, -1}, {0, 0, 1}};
+    const auto hit = scene.intersect(ray);
+    REQUIRE(hit);
+    const auto sp = scene.surface(ray, hit);
+    CHECK(sp.tint.r == approx(0.5f));
+    CHECK(sp.tint.g == approx(0.25f));
+    CHECK(sp.tint.b == approx(0.25f));
+    CHECK(sp.shading_normal == isin::Vertex<float>{0, 0, -1});
+}
+
+TEST_CASE_TEMPLATE("smooth shading: the shading normal blends the vertex normals; flat meshes keep theirs", T, float,
+                   double) {
+    isin::Mesh<T> mesh;
+    mesh.positions = {{0, 0, 5}, {0, 1, 5}, {1, 0, 5}}; // clockwise from the eye: front faces −z
+    mesh.indices = {{0, 1, 2}};
+    isin::Scene<T, isin::Sphere> flat_scene;
+    flat_scene.add_mesh(mesh, flat_scene.add_material({}));
+    const isin::Ray<T> ray{{T(0.25), T(0.5), 0}, {0, 0, 1}};
+    const auto flat = flat_scene.surface(ray, flat_scene.intersect(ray));
+    CHECK(flat.shading_normal == flat.normal);
+    CHECK(flat.shading_point == flat.point);
+
+    mesh.normals = {isin::normalize(isin::Vertex<T>{-1, 0, -1}), {0, 0, -1}, isin::normalize(isin::Vertex<T>{1, 0, -1})};
+    isin::Scene<T, isin::Sphere> scene;
+    scene.add_mesh(mesh, scene.add_material({}));
+    const auto hit = scene.intersect(ray);
+    REQUIRE(hit);
+    const auto sp = scene.surface(ray, hit);
+    // Barycentrics: u = 0.5 (V1), v = 0.25 (V2), 0.25 for V0.
+    CHECK(hit.u == approx(T(0.5)));
+    const auto blend = isin::normalize(T(0.25) * mesh.normals[0] + T(0.5) * mesh.normals[1] + T(0.25) * mesh.normals[2]);
+    CHECK(sp.shading_normal.x == approx(blend.x));
+    CHECK(sp.shading_normal.z == approx(blend.z));
+    CHECK(sp.normal == isin::Vertex<T>{0, 0, -1});
+    // The normals spread outwards, as on a sphere: the shading point lies off the triangle on
+    // the side the ray came from (−z), never behind it.
+    CHECK(sp.shading_point.z < sp.point.z);
+    // Placed again, turned and moved: the same, in the world.
+    const auto place = isin::Transform<T>::translation({10, 0, 0});
+    const auto id = isin::MeshId{0};
+    scene.add_instance(id, place);
+    const isin::Ray<T> moved{{T(10.25), T(0.5), 0}, {0, 0, 1}};
+    const auto sp2 = scene.surface(moved, scene.intersect(moved));
+    CHECK(sp2.shading_normal.x == approx(blend.x));
+    CHECK(sp2.shading_point.z == approx(sp.shading_point.z));
+}
+
+TEST_CASE("smooth shading: the shading point lets lit facets of a coarse sphere see the light (no terminator)") {
+    // A coarse icosphere (320 facets) with exact sphere normals, lit from far away along +x: on
+    // facets that the smooth normal turns towards the light but whose plane faces away, a shadow
+    // ray from the hit point enters the sphere at once; from the shading point most get out.
+    const auto tris = workloads::icosphere<double>({0, 0, 0}, 1.0, 2);
+    auto mesh = isin::Mesh<double>::from_triangles(tris);
+    for (const auto& p : mesh.positions) mesh.normals.push_back(isin::normalize(p));
+    isin::Scene<double, isin::Sphere> scene;
+    scene.add_mesh(mesh, scene.add_material({}));
+    const isin::Vertex<double> light{1e4, 0, 0};
+    int lit_flat = 0, lit_smooth = 0, terminator = 0;
+    for (int i = 0; i < 200; ++i)
+        for (int j = 0; j < 200; ++j) { // rays from −z near the terminator (x = 0)
+            const isin::Ray<double> ray{{-0.3 + 0.6 * i / 200.0, -1 + 2 * j / 200.0, -5}, {0, 0, 1}};
+            const auto hit = scene.intersect(ray);
+            if (!hit) continue;
+            const auto sp = scene.surface(ray, hit);
+            const auto L = isin::normalize(light - sp.point);
+            if (!(isin::dot(sp.shading_normal, L) > 0.02) || isin::dot(sp.normal, L) > 0) continue;
+            ++terminator; // lit by the smooth normal, facing away by the facet's
+            const auto from = [&](const isin::Vertex<double>& p) {
+                const auto o = isin::offset_origin(p, sp.normal, 5.0);
+                return scene.transmittance(isin::Ray<double>{o, light - o}, 1.0) > 0;
+            };
+            lit_flat += from(sp.point);
+            lit_smooth += from(sp.shading_point);
+        }
+    CAPTURE(terminator);
+    CAPTURE(lit_flat);
+    CAPTURE(lit_smooth);
+    REQUIRE(terminator > 100);
+    CHECK(lit_flat < terminator / 100); // measured: 0 of 1976
+    CHECK(lit_smooth >= terminator * 99 / 100); // measured: all 1976
+}
+
+TEST_CASE("render: sRGB output encodes the same intensities with the sRGB curve") {
+    isin::Scene<float, isin::Sphere> scene;
+    isin::Material<float> grey;
+    grey.color = {0.5f, 0.5f, 0.5f};
+    grey.ka = 1, grey.kd = 0, grey.ks = 0; // ambient only: the colour itself
+    scene.add(isin::Sphere<float>{{0, 0, 50}, 20}, scene.add_material(grey));
+    const isin::Camera<float> cam(16, 9);
+    isin::RenderOptions opt;
+    opt.threads = 1;
+    const auto linear = isin::render(scene, cam, opt);
+    opt.encoding = isin::ColorEncoding::srgb;
+    const auto srgb = isin::render(scene, cam, opt);
+    CHECK(linear(8, 4).r == 128);
+    CHECK(srgb(8, 4).r == 188);
+    CHECK(srgb(0, 0).r == 0);
+}
