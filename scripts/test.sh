@@ -7,14 +7,14 @@
 #     (-mavx -mno-fma);
 #  3. runs the whole test suite four times — g++ and clang++ with warnings as errors, clang++ with
 #     AddressSanitizer and UndefinedBehaviorSanitizer, clang++ with ThreadSanitizer;
-#  4. compiles the benchmarks (against Embree: libembree-dev), warnings as errors, without
-#     running them;
+#  4. compiles the benchmarks (against Embree: libembree-dev; load_models against assimp:
+#     libassimp-dev), warnings as errors, without running them;
 #  5. fuzzes the file readers (scripts/fuzz.sh, ISIN_FUZZ_SECONDS per target, default 45; 0
 #     skips it).
 # set -e stops at the first step that fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/deps.sh clang-format parallel libembree-dev
+bash scripts/deps.sh clang-format parallel libembree-dev libassimp-dev
 jobs=$(nproc)
 bash scripts/format.sh --check
 # compiler | flags | extra CMake arguments

@@ -180,7 +180,9 @@ TEST_CASE("load_model OBJ: UTF-16 and binary files are clear errors; a UTF-8 byt
         CHECK(thrown([&] { (void)isin::load_mesh<float>(dir / "u16.obj"); }).find("UTF-16") != std::string::npos);
     }
     const std::string why = thrown([&] {
-        (void)isin::load_model<float>(dir.put("bin.obj", std::string("v 0 0 0\n\x7f" "ELF\0\0\1", 15)));
+        (void)isin::load_model<float>(dir.put("bin.obj", std::string("v 0 0 0\n\x7f"
+                                                                     "ELF\0\0\1",
+                                                                     15)));
     });
     CHECK(why.find("binary data (a NUL byte at offset 12)") != std::string::npos);
     CHECK(isin::load_model<float>(dir.put("bom.obj", "\xef\xbb\xbf" + text)).triangles() == 1);
@@ -190,9 +192,9 @@ TEST_CASE_TEMPLATE("load_model OBJ: shared vertices, same group name twice, non-
                    double) {
     TempDir dir("isin-model-");
     const auto model = isin::load_model<T>(dir.put("parts.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0.5\nv 0 1 0\nv 0.5 0.5 3\n"
-                                                                "o a\nf 1 2 3 4\n"     // non-planar quad
-                                                                "o b\nf 1 2 5\n"       // a second object
-                                                                "o a\nf 3 4 5\n"));    // back to the first
+                                                                "o a\nf 1 2 3 4\n"  // non-planar quad
+                                                                "o b\nf 1 2 5\n"    // a second object
+                                                                "o a\nf 3 4 5\n")); // back to the first
     REQUIRE(model.meshes.size() == 2);
     CHECK(model.names[0] == "a");
     CHECK(model.meshes[0].size() == 3); // the quad's 2 and one more
@@ -203,6 +205,17 @@ TEST_CASE_TEMPLATE("load_model OBJ: shared vertices, same group name twice, non-
     CHECK(model.meshes[1].positions.size() == 3); // only what its faces use
     CHECK(model.materials.size() == 1);
     CHECK(model.warnings.empty());
+
+    // A position used with two normals is two vertices; the same v/vn pair again is the same one.
+    const auto corner = isin::load_model<T>(dir.put("corner.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                                                                  "vn 0 0 1\nvn 1 0 0\n"
+                                                                  "f 1//1 2//1 3//1\nf 1//2 3//2 4//2\n"
+                                                                  "f 1//1 3//1 2//1\nf 4//2 3//2 1//2\n"));
+    REQUIRE(corner.meshes.size() == 1);
+    CHECK(corner.meshes[0].positions.size() == 6);
+    CHECK(corner.meshes[0].indices[2] == std::array<std::uint32_t, 3>{0, 2, 1});
+    CHECK(corner.meshes[0].indices[3] == std::array<std::uint32_t, 3>{5, 4, 3});
+    CHECK(corner.meshes[0].normals[3] == isin::Vertex<T>{1, 0, 0});
 
     isin::ModelOptions options;
     options.compute_normals = true;
@@ -217,8 +230,9 @@ TEST_CASE("load_model: errors name the file; an unknown extension is std::invali
     const std::string why = thrown([&] { (void)isin::load_model<float>(dir.put("bad.obj", "v 0 0 0\nf 1 2 3\n")); });
     CHECK(why.find("bad.obj") != std::string::npos);
     CHECK(why.find("line 2") != std::string::npos);
-    const std::string vt = thrown(
-        [&] { (void)isin::load_model<float>(dir.put("vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n")); });
+    const std::string vt = thrown([&] {
+        (void)isin::load_model<float>(dir.put("vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n"));
+    });
     CHECK(vt.find("texture coordinate index 2 is out of range") != std::string::npos);
     // A .mtl whose number tinyobjloader's parser must not see is a clear error naming the .mtl.
     dir.put("m.mtl", "newmtl a\nKd 1e-2147483648 0 0\n");
@@ -280,7 +294,8 @@ TEST_CASE_TEMPLATE("smooth shading: the shading normal blends the vertex normals
     CHECK(flat.shading_normal == flat.normal);
     CHECK(flat.shading_point == flat.point);
 
-    mesh.normals = {isin::normalize(isin::Vertex<T>{-1, 0, -1}), {0, 0, -1}, isin::normalize(isin::Vertex<T>{1, 0, -1})};
+    mesh.normals = {
+        isin::normalize(isin::Vertex<T>{-1, 0, -1}), {0, 0, -1}, isin::normalize(isin::Vertex<T>{1, 0, -1})};
     isin::Scene<T, isin::Sphere> scene;
     scene.add_mesh(mesh, scene.add_material({}));
     const auto hit = scene.intersect(ray);
@@ -288,7 +303,8 @@ TEST_CASE_TEMPLATE("smooth shading: the shading normal blends the vertex normals
     const auto sp = scene.surface(ray, hit);
     // Barycentrics: u = 0.5 (V1), v = 0.25 (V2), 0.25 for V0.
     CHECK(hit.u == approx(T(0.5)));
-    const auto blend = isin::normalize(T(0.25) * mesh.normals[0] + T(0.5) * mesh.normals[1] + T(0.25) * mesh.normals[2]);
+    const auto blend =
+        isin::normalize(T(0.25) * mesh.normals[0] + T(0.5) * mesh.normals[1] + T(0.25) * mesh.normals[2]);
     CHECK(sp.shading_normal.x == approx(blend.x));
     CHECK(sp.shading_normal.z == approx(blend.z));
     CHECK(sp.normal == isin::Vertex<T>{0, 0, -1});
@@ -336,7 +352,7 @@ TEST_CASE("smooth shading: the shading point lets lit facets of a coarse sphere 
     CAPTURE(lit_flat);
     CAPTURE(lit_smooth);
     REQUIRE(terminator > 100);
-    CHECK(lit_flat < terminator / 100); // measured: 0 of 1976
+    CHECK(lit_flat < terminator / 100);         // measured: 0 of 1976
     CHECK(lit_smooth >= terminator * 99 / 100); // measured: all 1976
 }
 

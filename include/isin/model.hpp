@@ -39,11 +39,11 @@ namespace isin {
 
 /// Options of load_model.
 struct ModelOptions {
-    ReadLimits limits;                                ///< for the model, its .mtl files and textures
-    ColorEncoding textures = ColorEncoding::linear;   ///< how texture bytes map to intensities
-    bool load_textures = true;                        ///< false: materials keep no textures
-    bool compute_normals = false;                     ///< meshes without normals get computed ones
-    double crease_angle_degrees = 60;                 ///< for compute_normals (see isin::compute_normals)
+    ReadLimits limits;                              ///< for the model, its .mtl files and textures
+    ColorEncoding textures = ColorEncoding::linear; ///< how texture bytes map to intensities
+    bool load_textures = true;                      ///< false: materials keep no textures
+    bool compute_normals = false;                   ///< meshes without normals get computed ones
+    double crease_angle_degrees = 60;               ///< for compute_normals (see isin::compute_normals)
 };
 
 /// A model from a file: see the top of this header.
@@ -69,8 +69,7 @@ struct Model {
 template <class T>
 [[nodiscard]] Model<T> load_model(const std::string& path, const ModelOptions& options = {});
 
-#define ISIN_DETAIL_MODEL_IO(T)                                                                                        \
-    extern template Model<T> load_model<T>(const std::string&, const ModelOptions&);
+#define ISIN_DETAIL_MODEL_IO(T) extern template Model<T> load_model<T>(const std::string&, const ModelOptions&);
 ISIN_DETAIL_MODEL_IO(float)
 ISIN_DETAIL_MODEL_IO(double)
 #undef ISIN_DETAIL_MODEL_IO

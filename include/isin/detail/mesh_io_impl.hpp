@@ -29,8 +29,7 @@ namespace isin {
 namespace detail {
 
 template <class T>
-[[nodiscard]] std::vector<Triangle<T>> parse_ply(const char* who, const std::string& name, std::string_view file) {
-    const Mesh<T> mesh = parse_ply_mesh<T>(who, name, file);
+[[nodiscard]] std::vector<Triangle<T>> triangles_of(const Mesh<T>& mesh) {
     std::vector<Triangle<T>> out;
     out.reserve(mesh.size());
     for (std::size_t i = 0; i < mesh.size(); ++i) out.push_back(mesh.triangle(i));
@@ -126,22 +125,30 @@ inline void obj_build_meshes(const ObjCollector<T>& c, Model<T>& model) {
     bool any_material = false;
     for (const auto& f : c.faces) any_material = any_material || f.material >= 0;
 
-    std::vector<std::uint32_t> by_position(c.vertices.size(), std::numeric_limits<std::uint32_t>::max());
-    std::unordered_map<ObjVertexKey, std::uint32_t, ObjVertexKeyHash> by_key;
+    // A vertex is a distinct v/vt/vn triple of its part. Most positions come with one vt/vn pair:
+    // the first is kept in a table by position, only further pairs go into a hash map.
+    constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+    struct FirstUse {
+        std::int32_t vt, vn;
+        std::uint32_t local; // the part's vertex, or none
+    };
+    std::vector<FirstUse> first(c.vertices.size(), FirstUse{-1, -1, none});
+    std::unordered_map<ObjVertexKey, std::uint32_t, ObjVertexKeyHash> more;
     std::vector<std::uint32_t> local;
     std::vector<FanRun> runs;
     for (std::size_t p = 0; p < parts; ++p) {
         if (faces_in[p] == faces_in[p + 1]) continue;
         Mesh<T> mesh;
         bool has_uv = false, has_normal = false;
+        std::size_t corners = 0;
         for (std::size_t i = faces_in[p]; i < faces_in[p + 1]; ++i)
-            for (std::uint32_t k = 0; k < c.faces[order[i]].corners; ++k) {
+            for (std::uint32_t k = 0; k < c.faces[order[i]].corners; ++k, ++corners) {
                 const auto& corner = c.corners[first_corner[order[i]] + k];
                 has_uv = has_uv || corner.vt >= 0;
                 has_normal = has_normal || corner.vn >= 0;
             }
-        const bool by_v = !has_uv && !has_normal; // positions alone: a flat table, no hashing
-        by_key.clear();
+        mesh.indices.reserve(corners - 2 * (faces_in[p + 1] - faces_in[p]));
+        more.clear();
         runs.clear();
         for (std::size_t i = faces_in[p]; i < faces_in[p + 1]; ++i) {
             const auto& face = c.faces[order[i]];
@@ -149,10 +156,15 @@ inline void obj_build_meshes(const ObjCollector<T>& c, Model<T>& model) {
             for (std::uint32_t k = 0; k < face.corners; ++k) {
                 const auto& corner = c.corners[first_corner[order[i]] + k];
                 const auto next = static_cast<std::uint32_t>(mesh.positions.size());
-                std::uint32_t& slot = by_v ? by_position[static_cast<std::size_t>(corner.v)]
-                                           : by_key.try_emplace({corner.v, corner.vt, corner.vn}, next).first->second;
-                if (by_v ? slot == std::numeric_limits<std::uint32_t>::max() : slot == next) {
-                    slot = next;
+                FirstUse& use = first[static_cast<std::size_t>(corner.v)];
+                std::uint32_t slot = next;
+                if (use.local == none)
+                    use = {corner.vt, corner.vn, next};
+                else if (use.vt == corner.vt && use.vn == corner.vn)
+                    slot = use.local;
+                else
+                    slot = more.try_emplace({corner.v, corner.vt, corner.vn}, next).first->second;
+                if (slot == next) {
                     mesh.positions.push_back(c.vertices[static_cast<std::size_t>(corner.v)]);
                     if (has_uv)
                         mesh.uvs.push_back(corner.vt >= 0 ? c.uvs[static_cast<std::size_t>(corner.vt)]
@@ -169,11 +181,9 @@ inline void obj_build_meshes(const ObjCollector<T>& c, Model<T>& model) {
                 mesh.material.insert(mesh.material.end(), mesh.indices.size() - before,
                                      static_cast<std::uint32_t>(face.material + 1));
         }
-        if (by_v) // reset the table for the next part
-            for (std::size_t i = faces_in[p]; i < faces_in[p + 1]; ++i)
-                for (std::uint32_t k = 0; k < c.faces[order[i]].corners; ++k)
-                    by_position[static_cast<std::size_t>(c.corners[first_corner[order[i]] + k].v)] =
-                        std::numeric_limits<std::uint32_t>::max();
+        for (std::size_t i = faces_in[p]; i < faces_in[p + 1]; ++i) // reset the table for the next part
+            for (std::uint32_t k = 0; k < c.faces[order[i]].corners; ++k)
+                first[static_cast<std::size_t>(c.corners[first_corner[order[i]] + k].v)].local = none;
         retriangulate_fans(mesh.positions, mesh.indices, runs);
         model.meshes.push_back(std::move(mesh));
         model.names.push_back(c.part_names[p]);
@@ -291,7 +301,12 @@ std::vector<Triangle<T>> load_obj(const std::string& path, const ReadLimits& lim
 template <class T>
 std::vector<Triangle<T>> load_ply(const std::string& path, const ReadLimits& limits) {
     const char* who = "isin::load_ply";
-    return detail::parse_ply<T>(who, path, detail::mesh_read_file(who, path, limits));
+    Mesh<T> mesh;
+    {
+        const std::string bytes = detail::mesh_read_file(who, path, limits); // freed before the triangles are made
+        mesh = detail::parse_ply_mesh<T>(who, path, bytes);
+    }
+    return detail::triangles_of(mesh);
 }
 
 /// Triangles of OBJ or PLY data in memory (`size` bytes at `data`), as load_obj / load_ply read
@@ -302,7 +317,7 @@ std::vector<Triangle<T>> load_mesh_from_memory(const void* data, std::size_t siz
                                                const std::string& name) {
     const std::string_view bytes(data ? static_cast<const char*>(data) : "", data ? size : 0);
     return format == MeshFormat::obj ? detail::parse_obj<T>("isin::load_obj", name, bytes)
-                                     : detail::parse_ply<T>("isin::load_ply", name, bytes);
+                                     : detail::triangles_of(detail::parse_ply_mesh<T>("isin::load_ply", name, bytes));
 }
 
 /// Triangles of an OBJ or PLY file, chosen by the extension (.obj, .ply, any letter case).
