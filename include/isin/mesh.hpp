@@ -1,6 +1,7 @@
 #pragma once
-/// isin — triangle meshes from files: Wavefront OBJ (parsed by tinyobjloader) and PLY (built in).
-/// Declarations only: the code, with tinyobjloader's, is compiled once, in the translation unit
+/// isin — triangle meshes from files: Wavefront OBJ and PLY (isin's own readers; tinyobjloader
+/// reads the .mtl files of load_model). Declarations only: the code, with tinyobjloader's, is
+/// compiled once, in the translation unit
 /// that defines ISIN_IMPLEMENTATION before including isin, or in CMake's isin::io library; it is
 /// there for T = float and double.
 ///
@@ -26,10 +27,9 @@
 /// stays proportional to the file size. An unknown extension in load_mesh throws
 /// std::invalid_argument; load_obj without tinyobjloader throws std::runtime_error.
 ///
-/// OBJ coordinates are the values tinyobjloader computes; its number parser is not correctly
-/// rounded, so a double can differ from the nearest double of the decimal text in the last bit.
-/// isin checks every number's syntax itself first (tinyobjloader reads "1,5", "nan" or "abc"
-/// as 0 without complaint), so no malformed number gets through.
+/// OBJ coordinates are read exactly (std::from_chars: the nearest T of the decimal text), every
+/// number's syntax checked ("1,5", "nan" or "abc" are errors, not 0); the exponent and length
+/// limits that tinyobjloader's parser needed are kept, so files behave as before.
 #include <cstddef>
 #include <stdexcept>
 #include <string>

@@ -7,7 +7,7 @@
 ///     isin::add_model(scene, spider);        // materials, textures, one mesh per group
 ///
 /// What is read:
-///  - OBJ (through tinyobjloader): v, vt, vn, f (polygons of any size), g and o (each name a
+///  - OBJ (isin's reader; the .mtl files through tinyobjloader): v, vt, vn, f (polygons of any size), g and o (each name a
 ///    mesh; the same name again adds to that mesh), usemtl, mtllib. Every distinct v/vt/vn
 ///    triple of a mesh is one vertex. The .mtl files (paths relative to the OBJ) give each
 ///    material: Kd → color, Ka → ambient_color, Ks → specular_color, Ns → shininess, d or Tr →

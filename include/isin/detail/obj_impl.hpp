@@ -1,6 +1,9 @@
 #pragma once
-/// isin — private: the OBJ reader behind load_obj, load_mesh and load_model: isin checks the
-/// text, tinyobjloader parses it, isin checks the result.
+/// isin — private: the OBJ reader behind load_obj, load_mesh and load_model. isin reads the
+/// statements in one pass, checking every number and reference (tinyobjloader's own parser reads
+/// "1,5" or "nan" as 0 without complaint and would parse the text a second time); tinyobjloader
+/// reads the .mtl files.
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -26,7 +29,7 @@ namespace isin {
 namespace detail {
 
 // =================================================================================================
-// OBJ: isin checks the text, tinyobjloader parses it, isin checks the result.
+// OBJ: statements read by isin, .mtl files by tinyobjloader.
 // =================================================================================================
 
 /// Calls f(line_number, begin, end) for each line as tinyobjloader splits them ('\n', "\r\n"
@@ -94,8 +97,10 @@ inline void obj_for_each_line(std::string_view text, F&& f) {
     return true;
 }
 
-/// Checks one face vertex reference v, v/vt, v//vn or v/vt/vn; returns "" or the problem.
-[[nodiscard]] inline std::string obj_check_reference(const char* b, const char* e) {
+/// Reads one face vertex reference v, v/vt, v//vn or v/vt/vn into `index` (v, vt, vn as written:
+/// 1-based, negative for relative, 0 for an absent vt or vn); returns "" or the problem.
+[[nodiscard]] inline std::string obj_parse_reference(const char* b, const char* e, int (&index)[3]) {
+    index[0] = index[1] = index[2] = 0;
     const char* slash = static_cast<const char*>(std::memchr(b, '/', static_cast<std::size_t>(e - b)));
     const char* v_end = slash ? slash : e;
     long long v = 0;
@@ -105,88 +110,27 @@ inline void obj_for_each_line(std::string_view text, F&& f) {
         return "vertex index " + mesh_quote(b, v_end) + " is out of range";
     if (status != NumberStatus::ok) return "malformed vertex reference " + mesh_quote(b, e);
     if (v == 0) return "vertex index 0 is invalid (OBJ counts from 1)";
+    index[0] = static_cast<int>(v);
     if (!slash) return "";
-    // "/vt", "/vt/vn" or "//vn": each part present is an integer, vn never empty.
+    // "/vt", "/vt/vn" or "//vn": each part present is an integer that fits an int, vn never empty.
     const char* p = slash + 1;
     const char* second = static_cast<const char*>(std::memchr(p, '/', static_cast<std::size_t>(e - p)));
     const char* vt_end = second ? second : e;
-    // tinyobjloader reads each part with atoi: every part must also fit an int.
-    const auto part = [](const char* pb, const char* pe) {
-        long long index = 0;
-        const NumberStatus part_status = mesh_parse_int(pb, pe, index);
+    const auto part = [](const char* pb, const char* pe, int& out) {
+        long long value = 0;
+        const NumberStatus part_status = mesh_parse_int(pb, pe, value);
         if (part_status == NumberStatus::malformed) return 1;
-        if (part_status == NumberStatus::out_of_range || index > std::numeric_limits<int>::max() ||
-            index < std::numeric_limits<int>::min())
+        if (part_status == NumberStatus::out_of_range || value > std::numeric_limits<int>::max() ||
+            value < std::numeric_limits<int>::min())
             return 2;
+        out = static_cast<int>(value);
         return 0;
     };
-    const int vt = (p == vt_end && second) ? 0 : part(p, vt_end);
-    const int vn = second ? part(second + 1, e) : 0;
+    const int vt = (p == vt_end && second) ? 0 : part(p, vt_end, index[1]);
+    const int vn = second ? part(second + 1, e, index[2]) : 0;
     if (vt == 1 || vn == 1) return "malformed vertex reference " + mesh_quote(b, e);
     if (vt == 2 || vn == 2) return "index in " + mesh_quote(b, e) + " is out of range";
     return "";
-}
-
-/// isin's own pass over the text: every number on a `v` line well formed and finite, the first
-/// three within T; every `f` line with at least 3 well-formed references, none 0.
-template <class T>
-inline void obj_check_text(const char* who, const std::string& path, std::string_view text) {
-    obj_for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
-        const auto fail = [&](const std::string& why) {
-            throw mesh_error(who, path, "line " + std::to_string(line) + ": " + why);
-        };
-        const char kind = obj_statement(b, e);
-        const char *tb = nullptr, *te = nullptr;
-        int count = 0;
-        if (kind == 'n' || kind == 't') { // not read by isin: only what tinyobjloader must not see
-            for (int k = 0; k < 3 && obj_token(b, e, tb, te); ++k) {
-                const std::string why = obj_unsafe_number(tb, te);
-                if (!why.empty()) fail(why);
-            }
-        } else if (kind == 'v') {
-            while (obj_token(b, e, tb, te) && *tb != '#') { // numbers until a trailing comment
-                const std::string unsafe = obj_unsafe_number(tb, te);
-                if (!unsafe.empty()) fail(unsafe);
-                double value = 0;
-                const NumberStatus status = mesh_parse_real(tb, te, value);
-                if (status != NumberStatus::ok) fail(mesh_bad_real("coordinate", tb, te, status));
-                if (count < 3 && !mesh_fits<T>(value))
-                    fail("coordinate " + mesh_quote(tb, te) + " does not fit in " + mesh_type_name<T>());
-                ++count;
-            }
-            if (count < 3) fail("vertex has " + std::to_string(count) + " coordinates, needs 3");
-        } else if (kind == 'f') {
-            while (obj_token(b, e, tb, te)) {
-                const std::string why = obj_check_reference(tb, te);
-                if (!why.empty()) fail(why);
-                ++count;
-            }
-            if (count < 3) fail("face has " + std::to_string(count) + " vertices, needs at least 3");
-        }
-        return true;
-    });
-}
-
-/// Sets the vertices listed in `redo` (ordinals of `v` statements, ascending) from the text with
-/// isin's own number parser; returns false if one does not give three numbers that fit T.
-template <class T>
-[[nodiscard]] inline bool obj_reread_vertices(std::string_view text, const std::vector<std::size_t>& redo,
-                                              std::vector<Vertex<T>>& vertices) {
-    std::size_t seen = 0, next = 0;
-    bool ok = true;
-    obj_for_each_line(text, [&](std::size_t, const char* b, const char* e) {
-        if (next == redo.size()) return false;
-        if (obj_statement(b, e) != 'v' || seen++ != redo[next]) return true;
-        double xyz[3] = {0, 0, 0};
-        const char *tb = nullptr, *te = nullptr;
-        for (double& v : xyz)
-            ok = ok && obj_token(b, e, tb, te) && mesh_parse_real(tb, te, v) == NumberStatus::ok && mesh_fits<T>(v);
-        if (ok && redo[next] < vertices.size())
-            vertices[redo[next]] = {static_cast<T>(xyz[0]), static_cast<T>(xyz[1]), static_cast<T>(xyz[2])};
-        ++next;
-        return ok;
-    });
-    return ok && next == redo.size();
 }
 
 /// Line number of the `ordinal`-th (from 0) statement of `kind` ('v' or 'f'); 0 if none.
@@ -216,10 +160,9 @@ public:
 // Internal linkage, as tinyobjloader's types in them (see tinyobj.hpp).
 namespace {
 
-/// What tinyobjloader's callbacks collect: positions, normals, texture coordinates, each face's
-/// corners (0-based, resolved as far as the file allows at that point), part and material, the
-/// materials of the .mtl files, and the first problem (statement kind and ordinal; its line is
-/// looked up only if there is one).
+/// What an OBJ holds: positions, normals, texture coordinates, each face's corners (0-based,
+/// resolved as far as the file allows at that point), part and material, the materials of the
+/// .mtl files, and the first problem found after the line it is on (statement kind and ordinal).
 template <class T>
 struct ObjCollector {
     /// A face corner: indices into vertices, uvs and normals; −1 for "none". A positive index may
@@ -242,9 +185,9 @@ struct ObjCollector {
     std::uint32_t part = 0;
     std::int32_t material = -1;
     std::vector<tobj::material_t> materials; // all .mtl files' materials so far
+    std::map<std::string, int> material_ids; // their names
     std::vector<std::string> material_dirs;  // the directory of each material's .mtl (texture paths)
     std::vector<std::string> warnings;
-    std::vector<std::size_t> redo; // vertices whose value tinyobjloader got wrong, in order
     char bad_kind = 0;
     std::size_t bad_ordinal = 0;
     std::string bad_why;
@@ -257,49 +200,20 @@ struct ObjCollector {
     }
 
     /// An attribute value as T: non-finite values and values beyond T read as 0.
-    [[nodiscard]] static T attribute(tobj::real_t x) noexcept {
-        const auto v = static_cast<double>(x);
-        return mesh_fits<T>(v) ? static_cast<T>(v) : T(0);
-    }
+    [[nodiscard]] static T attribute(double v) noexcept { return mesh_fits<T>(v) ? static_cast<T>(v) : T(0); }
 
-    static void on_vertex(void* self, tobj::real_t x, tobj::real_t y, tobj::real_t z, tobj::real_t) {
-        auto& c = *static_cast<ObjCollector*>(self);
-        const std::size_t k = c.vertices.size();
-        const double xyz[3] = {static_cast<double>(x), static_cast<double>(y), static_cast<double>(z)};
-        if (mesh_fits<T>(xyz[0]) && mesh_fits<T>(xyz[1]) && mesh_fits<T>(xyz[2])) {
-            c.vertices.push_back({static_cast<T>(xyz[0]), static_cast<T>(xyz[1]), static_cast<T>(xyz[2])});
-            return;
-        }
-        // The text passed obj_check_text, so the number fits T and tinyobjloader's arithmetic
-        // went astray ("0e500" gives NaN; its float real_t overflows): reread it after parsing.
-        c.redo.push_back(k);
-        c.vertices.push_back({T(0), T(0), T(0)});
+    void add_normal(const double (&xyz)[3]) {
+        ++normal_count;
+        if (attributes) normals.push_back({attribute(xyz[0]), attribute(xyz[1]), attribute(xyz[2])});
     }
-    static void on_normal(void* self, tobj::real_t x, tobj::real_t y, tobj::real_t z) {
-        auto& c = *static_cast<ObjCollector*>(self);
-        ++c.normal_count;
-        if (c.attributes) c.normals.push_back({attribute(x), attribute(y), attribute(z)});
+    void add_uv(const double (&xyz)[3]) {
+        ++uv_count;
+        if (attributes) uvs.push_back({attribute(xyz[0]), attribute(xyz[1])});
     }
-    static void on_texcoord(void* self, tobj::real_t x, tobj::real_t y, tobj::real_t) {
-        auto& c = *static_cast<ObjCollector*>(self);
-        ++c.uv_count;
-        if (c.attributes) c.uvs.push_back({attribute(x), attribute(y)});
-    }
-    static void on_group(void* self, const char** names, int count) {
-        auto& c = *static_cast<ObjCollector*>(self);
-        std::string name;
-        for (int i = 0; i < count; ++i) name += (i ? " " : "") + std::string(names[i]);
-        c.set_part(name);
-    }
-    static void on_object(void* self, const char* name) { static_cast<ObjCollector*>(self)->set_part(name); }
-    static void on_usemtl(void* self, const char* name, int id) {
-        auto& c = *static_cast<ObjCollector*>(self);
-        c.material = id;
-        if (id < 0) c.warnings.push_back("material '" + std::string(name).substr(0, 80) + "' is not defined");
-    }
-    static void on_mtllib(void* self, const tobj::material_t* m, int count) {
-        auto& c = *static_cast<ObjCollector*>(self);
-        c.materials.assign(m, m + count);
+    void use_material(const std::string& name) {
+        const auto found = material_ids.find(name);
+        material = found == material_ids.end() ? -1 : found->second;
+        if (material < 0) warnings.push_back("material '" + name.substr(0, 80) + "' is not defined");
     }
     void set_part(const std::string& name) {
         for (std::size_t i = 0; i < part_names.size(); ++i) // few parts in real files; a map if that changes
@@ -311,36 +225,30 @@ struct ObjCollector {
         part = static_cast<std::uint32_t>(part_names.size() - 1);
     }
 
-    static void on_face(void* self, tobj::index_t* indices, int n) {
-        auto& c = *static_cast<ObjCollector*>(self);
-        const std::size_t face = c.faces.size();
-        c.faces.push_back({static_cast<std::uint32_t>(n < 0 ? 0 : n), c.part, c.material});
-        if (c.bad_kind) return;
-        if (n < 3) return c.fail('f', face, "face has " + std::to_string(n) + " vertices, needs at least 3");
+    /// Adds a face of n ≥ 3 references (as obj_parse_reference reads them).
+    void add_face(const std::array<int, 3>* refs, std::size_t n) {
+        const std::size_t face = faces.size();
+        faces.push_back({static_cast<std::uint32_t>(n), part, material});
+        if (bad_kind) return;
         // Resolves one index; `what` names it, `count` is how many were read so far.
-        const auto resolve = [&](int raw, const char* what, std::size_t count, bool optional) -> std::int32_t {
-            if (raw == 0) {
-                if (!optional) c.fail('f', face, std::string(what) + " index 0 is invalid (OBJ counts from 1)");
-                return -1;
-            }
-            if (raw < 0) { // relative: −1 is the last one read so far
+        const auto resolve = [&](int raw, const char* what, std::size_t count) -> std::int32_t {
+            if (raw == 0) return -1; // no vt or vn (a vertex index 0 is refused when read)
+            if (raw < 0) {           // relative: −1 is the last one read so far
                 const auto back = static_cast<std::size_t>(-static_cast<long long>(raw));
                 if (back > count) {
-                    c.fail('f', face,
-                           std::string(what) + " index " + std::to_string(raw) + " is out of range (" +
-                               std::to_string(count) + " precede it)");
+                    fail('f', face,
+                         std::string(what) + " index " + std::to_string(raw) + " is out of range (" +
+                             std::to_string(count) + " precede it)");
                     return -1;
                 }
                 return static_cast<std::int32_t>(count - back);
             }
             return raw - 1;
         };
-        for (int i = 0; i < n; ++i) {
-            const tobj::index_t& k = indices[i];
-            c.corners.push_back({resolve(k.vertex_index, "vertex", c.vertices.size(), false),
-                                 resolve(k.texcoord_index, "texture coordinate", c.uv_count, true),
-                                 resolve(k.normal_index, "normal", c.normal_count, true)});
-        }
+        for (std::size_t i = 0; i < n; ++i)
+            corners.push_back({resolve(refs[i][0], "vertex", vertices.size()),
+                               resolve(refs[i][1], "texture coordinate", uv_count),
+                               resolve(refs[i][2], "normal", normal_count)});
     }
 
     /// After parsing: the first face (in file order, before any earlier problem) whose index is
@@ -425,12 +333,23 @@ private:
 
 } // namespace
 
-/// Parses OBJ text into `c`, after isin's own checks; throws MeshError for any problem.
-/// `dir` (ending in '/', or "") is where .mtl files are looked for; null `limits`: none read.
+/// The rest of a line after `keyword` and one space or tab, or nullptr if the line is not that
+/// statement (tinyobjloader's reading of g, o, usemtl and mtllib lines).
+[[nodiscard]] inline const char* obj_keyword(const char* b, const char* e, const char* keyword) noexcept {
+    while (b != e && (*b == ' ' || *b == '\t')) ++b;
+    const std::size_t n = std::strlen(keyword);
+    if (static_cast<std::size_t>(e - b) <= n || std::memcmp(b, keyword, n) != 0 || (b[n] != ' ' && b[n] != '\t'))
+        return nullptr;
+    return b + n + 1;
+}
+
+/// Parses OBJ text into `c` in one pass, checking every number and reference on the way; throws
+/// MeshError naming the line for any problem. `dir` (ending in '/', or "") is where .mtl files
+/// are looked for, through `limits`; null `limits`: positions and faces only (load_obj).
 template <class T>
 inline void obj_collect(const char* who, const std::string& name, std::string_view text, ObjCollector<T>& c,
                         const std::string& dir, const ReadLimits* limits) {
-    // A NUL byte: UTF-16 text or binary data, which tinyobjloader would read as nothing.
+    // A NUL byte: UTF-16 text or binary data, which no OBJ reader reads as what it holds.
     if (const void* nul = std::memchr(text.data(), 0, text.size())) {
         const auto at = static_cast<std::size_t>(static_cast<const char*>(nul) - text.data());
         const bool utf16 = text.size() >= 2 && ((text[0] == '\xff' && text[1] == '\xfe') ||
@@ -440,36 +359,96 @@ inline void obj_collect(const char* who, const std::string& name, std::string_vi
                                : "binary data (a NUL byte at offset " + std::to_string(at) + "), not OBJ text");
     }
     if (text.size() >= 3 && text.substr(0, 3) == "\xef\xbb\xbf") text.remove_prefix(3); // UTF-8 byte order mark
-    obj_check_text<T>(who, name, text);
-    tobj::callback_t callbacks;
-    callbacks.vertex_cb = &ObjCollector<T>::on_vertex;
-    callbacks.index_cb = &ObjCollector<T>::on_face;
-    callbacks.normal_cb = &ObjCollector<T>::on_normal;
-    callbacks.texcoord_cb = &ObjCollector<T>::on_texcoord;
     c.attributes = limits != nullptr;
-    if (limits) {
-        callbacks.group_cb = &ObjCollector<T>::on_group;
-        callbacks.object_cb = &ObjCollector<T>::on_object;
-        callbacks.usemtl_cb = &ObjCollector<T>::on_usemtl;
-        callbacks.mtllib_cb = &ObjCollector<T>::on_mtllib;
-    }
-    ObjTextBuf buf(text);
-    std::istream in(&buf);
-    std::string warn, err;
     std::unique_ptr<ObjMaterialReader<T>> mtl;
     if (limits) mtl = std::make_unique<ObjMaterialReader<T>>(dir, *limits, c);
-    // Without a reader, mtllib lines are skipped and no .mtl file is opened.
-    const bool ok = tobj::LoadObjWithCallback(in, callbacks, &c, mtl.get(), &warn, &err);
-    if (mtl && !mtl->error.empty()) throw mesh_error(who, name, "material file " + mtl->error);
-    if (!ok || !err.empty())
-        throw mesh_error(who, name, "tinyobjloader: " + (err.empty() ? std::string("failed") : err));
+    std::vector<std::string> mtl_files;   // read already
+    std::vector<std::array<int, 3>> refs; // a face's references
+    obj_for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
+        const auto fail = [&](const std::string& why) {
+            throw mesh_error(who, name, "line " + std::to_string(line) + ": " + why);
+        };
+        const char kind = obj_statement(b, e);
+        const char *tb = nullptr, *te = nullptr;
+        if (kind == 'v') {
+            double xyz[3] = {0, 0, 0};
+            int count = 0;
+            while (obj_token(b, e, tb, te) && *tb != '#') { // numbers (x y z [w] or x y z r g b) until a comment
+                const std::string unsafe = obj_unsafe_number(tb, te);
+                if (!unsafe.empty()) fail(unsafe);
+                double value = 0;
+                const NumberStatus status = mesh_parse_real(tb, te, value);
+                if (status != NumberStatus::ok) fail(mesh_bad_real("coordinate", tb, te, status));
+                if (count < 3) {
+                    if (!mesh_fits<T>(value))
+                        fail("coordinate " + mesh_quote(tb, te) + " does not fit in " + mesh_type_name<T>());
+                    xyz[count] = value;
+                }
+                ++count;
+            }
+            if (count < 3) fail("vertex has " + std::to_string(count) + " coordinates, needs 3");
+            c.vertices.push_back({static_cast<T>(xyz[0]), static_cast<T>(xyz[1]), static_cast<T>(xyz[2])});
+        } else if (kind == 'n' || kind == 't') { // up to three numbers; missing or malformed ones read as 0
+            double xyz[3] = {0, 0, 0};
+            for (int k = 0; k < 3 && obj_token(b, e, tb, te); ++k) {
+                const std::string unsafe = obj_unsafe_number(tb, te);
+                if (!unsafe.empty()) fail(unsafe);
+                if (mesh_parse_real(tb, te, xyz[k]) != NumberStatus::ok) xyz[k] = 0;
+            }
+            if (kind == 'n')
+                c.add_normal(xyz);
+            else
+                c.add_uv(xyz);
+        } else if (kind == 'f') {
+            refs.clear();
+            while (obj_token(b, e, tb, te)) {
+                int index[3];
+                const std::string why = obj_parse_reference(tb, te, index);
+                if (!why.empty()) fail(why);
+                refs.push_back({index[0], index[1], index[2]});
+            }
+            const std::size_t n = refs.size();
+            if (n < 3) fail("face has " + std::to_string(n) + " vertices, needs at least 3");
+            if (n > std::numeric_limits<std::uint32_t>::max()) fail("face has more than 2^32 - 1 vertices");
+            c.add_face(refs.data(), n);
+        } else if (c.attributes) {
+            if (const char* rest = obj_keyword(b, e, "g")) { // group: the names on the line
+                std::string names;
+                while (obj_token(rest, e, tb, te)) names += (names.empty() ? "" : " ") + std::string(tb, te);
+                c.set_part(names);
+            } else if ((rest = obj_keyword(b, e, "o"))) {
+                c.set_part(std::string(rest, e));
+            } else if ((rest = obj_keyword(b, e, "usemtl"))) {
+                c.use_material(std::string(rest, e));
+            } else if ((rest = obj_keyword(b, e, "mtllib"))) {
+                // File names separated by spaces ('\ ' is a space in a name); the first that reads is used.
+                std::vector<std::string> files(1);
+                for (const char* p = rest; p != e; ++p) {
+                    if (*p == '\\' && p + 1 != e && p[1] == ' ')
+                        files.back() += *++p;
+                    else if (*p == ' ')
+                        files.emplace_back();
+                    else
+                        files.back() += *p;
+                }
+                for (const std::string& file : files) {
+                    if (file.empty()) continue;
+                    if (std::find(mtl_files.begin(), mtl_files.end(), file) != mtl_files.end()) break;
+                    if ((*mtl)(file, &c.materials, &c.material_ids, nullptr, nullptr)) {
+                        mtl_files.push_back(file);
+                        break;
+                    }
+                    if (!mtl->error.empty()) throw mesh_error(who, name, "material file " + mtl->error);
+                }
+            }
+        }
+        return true;
+    });
     c.check_ranges();
-    const auto at_line = [&](char kind, std::size_t ordinal, const std::string& why) {
-        return mesh_error(who, name, "line " + std::to_string(obj_statement_line(text, kind, ordinal)) + ": " + why);
-    };
-    if (c.bad_kind) throw at_line(c.bad_kind, c.bad_ordinal, c.bad_why);
-    if (!c.redo.empty() && !obj_reread_vertices(text, c.redo, c.vertices))
-        throw at_line('v', c.redo.front(), "coordinate out of range for " + std::string(mesh_type_name<T>()));
+    if (c.bad_kind)
+        throw mesh_error(who, name,
+                         "line " + std::to_string(obj_statement_line(text, c.bad_kind, c.bad_ordinal)) + ": " +
+                             c.bad_why);
     if (c.vertices.size() > std::numeric_limits<std::uint32_t>::max())
         throw mesh_error(who, name, "more than 2^32 - 1 vertices");
 }

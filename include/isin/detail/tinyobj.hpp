@@ -1,5 +1,5 @@
 #pragma once
-/// isin — private: brings in tinyobjloader (Wavefront OBJ parsing) for isin/mesh.hpp.
+/// isin — private: brings in tinyobjloader (it reads the .mtl files of OBJ models) for isin/mesh.hpp.
 ///
 /// tinyobjloader is not copied into isin; this header only includes the system's copy
 /// (Debian/Ubuntu: `apt install libtinyobjloader-dev`, header /usr/include/tiny_obj_loader.h).
