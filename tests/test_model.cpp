@@ -224,6 +224,31 @@ TEST_CASE_TEMPLATE("load_model OBJ: shared vertices, same group name twice, non-
     smooth.meshes[0].validate();
 }
 
+TEST_CASE_TEMPLATE("load_model_from_memory reads what load_model reads, without .mtl files", T, float, double) {
+    TempDir dir("isin-model-");
+    const std::string text = house_obj;
+    const auto model = isin::load_model_from_memory<T>(text.data(), text.size(), isin::MeshFormat::obj, "house");
+    const auto from_file = isin::load_model<T>(dir.put("house.obj", house_obj));
+    REQUIRE(model.meshes.size() == 2);
+    CHECK(model.meshes[0].indices == from_file.meshes[0].indices);
+    CHECK(model.meshes[1].positions == from_file.meshes[1].positions);
+    CHECK(model.names == from_file.names);
+    REQUIRE(model.warnings.size() >= 1); // mtllib: not read from memory
+    CHECK(model.warnings[0].find("line 2: mtllib") != std::string::npos);
+    CHECK(model.materials.size() == 1);
+    const std::string bad = "v 0 0 0\nf 1 2 3\n";
+    CHECK_THROWS_WITH_AS((void)isin::load_model_from_memory<T>(bad.data(), bad.size(), isin::MeshFormat::obj, "net"),
+                         doctest::Contains("'net': line 2"), isin::MeshError);
+    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                            "0 0 0\n0 1 0\n1 0 0\n3 0 1 2\n";
+    isin::ModelOptions options;
+    options.compute_normals = true;
+    const auto tile = isin::load_model_from_memory<T>(ply.data(), ply.size(), isin::MeshFormat::ply, "tile", options);
+    CHECK(tile.names[0] == "tile");
+    CHECK(tile.meshes[0].normals.size() == 3);
+}
+
 TEST_CASE("load_model: errors name the file; an unknown extension is std::invalid_argument") {
     TempDir dir("isin-model-");
     CHECK_THROWS_AS((void)isin::load_model<float>(dir.put("x.stl", "solid")), std::invalid_argument);

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "indexed_mesh.hpp"
+#include "mesh.hpp"
 #include "read_limits.hpp"
 #include "scene.hpp"
 #include "shading.hpp"
@@ -69,7 +70,17 @@ struct Model {
 template <class T>
 [[nodiscard]] Model<T> load_model(const std::string& path, const ModelOptions& options = {});
 
-#define ISIN_DETAIL_MODEL_IO(T) extern template Model<T> load_model<T>(const std::string&, const ModelOptions&);
+/// The model in OBJ or PLY data in memory (`size` bytes at `data`), as load_model reads a file,
+/// for data from a network or an archive: no .mtl file is read (mtllib lines give a warning),
+/// errors name `name` in place of a file. The PLY mesh is named `name`.
+template <class T>
+[[nodiscard]] Model<T> load_model_from_memory(const void* data, std::size_t size, MeshFormat format,
+                                              const std::string& name = "memory", const ModelOptions& options = {});
+
+#define ISIN_DETAIL_MODEL_IO(T)                                                                                        \
+    extern template Model<T> load_model<T>(const std::string&, const ModelOptions&);                                   \
+    extern template Model<T> load_model_from_memory<T>(const void*, std::size_t, MeshFormat, const std::string&,       \
+                                                       const ModelOptions&);
 ISIN_DETAIL_MODEL_IO(float)
 ISIN_DETAIL_MODEL_IO(double)
 #undef ISIN_DETAIL_MODEL_IO

@@ -1,7 +1,9 @@
-// libFuzzer target: the PLY reader (isin::load_mesh_from_memory, MeshFormat::ply) in float and
-// double. isin::MeshError is the defined answer to bad data; anything else is a finding.
+// libFuzzer target: the PLY reader through isin::load_mesh_from_memory (float) and
+// isin::load_model_from_memory (double, normals computed). isin::MeshError is the defined answer
+// to bad data; anything else is a finding.
 #define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
 #include <isin/mesh.hpp>
+#include <isin/model.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -10,8 +12,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     try {
         (void)isin::load_mesh_from_memory<float>(data, size, isin::MeshFormat::ply);
     } catch (const isin::MeshError&) {}
-    try {
-        (void)isin::load_mesh_from_memory<double>(data, size, isin::MeshFormat::ply);
+    try { // the whole model (groups, materials named, normals, uvs, colours), normals computed
+        isin::ModelOptions options;
+        options.compute_normals = true;
+        (void)isin::load_model_from_memory<double>(data, size, isin::MeshFormat::ply, "fuzz", options);
     } catch (const isin::MeshError&) {}
     return 0;
 }

@@ -192,10 +192,11 @@ inline void obj_build_meshes(const ObjCollector<T>& c, Model<T>& model) {
 
 template <class T>
 [[nodiscard]] Model<T> parse_obj_model(const char* who, const std::string& path, std::string_view text,
-                                       const ModelOptions& options) {
+                                       const ModelOptions& options, bool from_file = true) {
     ObjCollector<T> c;
     const std::size_t slash = path.find_last_of('/');
-    obj_collect<T>(who, path, text, c, slash == std::string::npos ? "" : path.substr(0, slash + 1), &options.limits);
+    obj_collect<T>(who, path, text, c, slash == std::string::npos ? "" : path.substr(0, slash + 1), &options.limits,
+                   from_file);
     Model<T> model;
     obj_build_meshes(c, model);
     Material<T> fallback;
@@ -258,6 +259,21 @@ template <class T>
 
 } // namespace detail
 
+namespace detail {
+/// What load_model does once the file is parsed: normals computed where asked for.
+template <class T>
+void finish_model(Model<T>& model, const ModelOptions& options) {
+    if (options.compute_normals)
+        for (Mesh<T>& mesh : model.meshes)
+            if (mesh.normals.empty()) compute_normals(mesh, static_cast<T>(options.crease_angle_degrees));
+}
+[[noreturn]] inline void throw_no_tinyobjloader(const char* who, const std::string& name) {
+    throw std::runtime_error(std::string(who) + ": '" + name +
+                             "': reading OBJ needs tinyobjloader "
+                             "(Debian/Ubuntu: install libtinyobjloader-dev); PLY works without it");
+}
+} // namespace detail
+
 template <class T>
 Model<T> load_model(const std::string& path, const ModelOptions& options) {
     static_assert(std::is_floating_point_v<T>, "isin::load_model needs a floating-point type");
@@ -270,17 +286,33 @@ Model<T> load_model(const std::string& path, const ModelOptions& options) {
 #if ISIN_HAVE_TINYOBJLOADER
         model = detail::parse_obj_model<T>(who, path, detail::mesh_read_file(who, path, options.limits), options);
 #else
-        throw std::runtime_error(std::string(who) + ": '" + path +
-                                 "': reading OBJ needs tinyobjloader "
-                                 "(Debian/Ubuntu: install libtinyobjloader-dev); PLY works without it");
+        detail::throw_no_tinyobjloader(who, path);
 #endif
     } else {
         throw std::invalid_argument(std::string(who) + ": '" + path + "': unknown extension '" + ext +
                                     "' (use .obj or .ply)");
     }
-    if (options.compute_normals)
-        for (Mesh<T>& mesh : model.meshes)
-            if (mesh.normals.empty()) compute_normals(mesh, static_cast<T>(options.crease_angle_degrees));
+    detail::finish_model(model, options);
+    return model;
+}
+
+template <class T>
+Model<T> load_model_from_memory(const void* data, std::size_t size, MeshFormat format, const std::string& name,
+                                const ModelOptions& options) {
+    static_assert(std::is_floating_point_v<T>, "isin::load_model needs a floating-point type");
+    const char* who = "isin::load_model";
+    const std::string_view bytes(data ? static_cast<const char*>(data) : "", data ? size : 0);
+    Model<T> model;
+    if (format == MeshFormat::ply) {
+        model = detail::parse_ply_model<T>(who, name, bytes);
+    } else {
+#if ISIN_HAVE_TINYOBJLOADER
+        model = detail::parse_obj_model<T>(who, name, bytes, options, false);
+#else
+        detail::throw_no_tinyobjloader(who, name);
+#endif
+    }
+    detail::finish_model(model, options);
     return model;
 }
 
@@ -336,7 +368,9 @@ std::vector<Triangle<T>> load_mesh(const std::string& path, const ReadLimits& li
     template std::vector<Triangle<T>> load_mesh_from_memory<T>(const void*, std::size_t, MeshFormat,                   \
                                                                const std::string&);                                    \
     template std::vector<Triangle<T>> load_mesh<T>(const std::string&, const ReadLimits&);                             \
-    template Model<T> load_model<T>(const std::string&, const ModelOptions&);
+    template Model<T> load_model<T>(const std::string&, const ModelOptions&);                                          \
+    template Model<T> load_model_from_memory<T>(const void*, std::size_t, MeshFormat, const std::string&,              \
+                                                const ModelOptions&);
 ISIN_DETAIL_MESH_IO(float)
 ISIN_DETAIL_MESH_IO(double)
 #undef ISIN_DETAIL_MESH_IO

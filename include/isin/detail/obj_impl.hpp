@@ -345,10 +345,11 @@ private:
 
 /// Parses OBJ text into `c` in one pass, checking every number and reference on the way; throws
 /// MeshError naming the line for any problem. `dir` (ending in '/', or "") is where .mtl files
-/// are looked for, through `limits`; null `limits`: positions and faces only (load_obj).
+/// are looked for, through `limits`; null `limits`: positions and faces only (load_obj). Without
+/// `read_materials` (data from memory), mtllib lines are left out with a warning.
 template <class T>
 inline void obj_collect(const char* who, const std::string& name, std::string_view text, ObjCollector<T>& c,
-                        const std::string& dir, const ReadLimits* limits) {
+                        const std::string& dir, const ReadLimits* limits, bool read_materials = true) {
     // A NUL byte: UTF-16 text or binary data, which no OBJ reader reads as what it holds.
     if (const void* nul = std::memchr(text.data(), 0, text.size())) {
         const auto at = static_cast<std::size_t>(static_cast<const char*>(nul) - text.data());
@@ -420,7 +421,10 @@ inline void obj_collect(const char* who, const std::string& name, std::string_vi
                 c.set_part(std::string(rest, e));
             } else if ((rest = obj_keyword(b, e, "usemtl"))) {
                 c.use_material(std::string(rest, e));
-            } else if ((rest = obj_keyword(b, e, "mtllib"))) {
+            } else if ((rest = obj_keyword(b, e, "mtllib")) && !read_materials) {
+                c.warnings.push_back("line " + std::to_string(line) +
+                                     ": mtllib: no material files are read for data in memory");
+            } else if (rest) {
                 // File names separated by spaces ('\ ' is a space in a name); the first that reads is used.
                 std::vector<std::string> files(1);
                 for (const char* p = rest; p != e; ++p) {
