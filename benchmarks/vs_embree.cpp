@@ -271,6 +271,269 @@ struct Bench {
 
 // ---- build times (child process) -----------------------------------------------------------------
 
+// ---- many rays at once: isin's stream calls against Embree's packets ---------------------------
+
+// printf into a string (the packet table is printed after the main one).
+template <class... A>
+void appendf(std::string& out, const char* format, A... args) {
+    char line[1024];
+    std::snprintf(line, sizeof line, format, args...);
+    out += line;
+}
+
+// Fills lanes [0, n) of an Embree packet of N rays from isin rays (lanes ≥ n invalid).
+template <int N, class RayN>
+void to_embree(const isin::Ray<float>* rays, const float* t_max, int n, RayN& r, int* valid) {
+    for (int k = 0; k < N; ++k) {
+        const isin::Ray<float>& ray = rays[k < n ? k : 0];
+        valid[k] = k < n ? -1 : 0;
+        r.org_x[k] = ray.origin.x, r.org_y[k] = ray.origin.y, r.org_z[k] = ray.origin.z;
+        r.dir_x[k] = ray.direction.x, r.dir_y[k] = ray.direction.y, r.dir_z[k] = ray.direction.z;
+        r.tnear[k] = 0.0f, r.tfar[k] = t_max ? t_max[k < n ? k : 0] : inf, r.time[k] = 0.0f;
+        r.mask[k] = ~0u, r.id[k] = 0, r.flags[k] = 0;
+    }
+}
+
+// The same rays for both libraries, each set in the order a renderer would make them: camera
+// rays in 4×4-pixel tiles (16 consecutive rays = one tile = one packet), shadow rays of those
+// hits towards the light (same order, so also coherent), and one diffuse bounce per hit
+// (cosine-distributed about the normal: incoherent).
+struct PacketBench {
+    std::vector<isin::Ray<float>> primary, shadow, diffuse;
+    std::vector<float> shadow_t_max;
+    const isin::Bvh<float>& bvh;
+    RTCScene scene;
+    static constexpr std::size_t job = 1024; // rays handed to a thread at a time
+
+    PacketBench(const Options& opt, const isin::Bvh<float>& b, RTCScene s, const std::vector<Tri>& tris)
+        : bvh(b), scene(s) {
+        const isin::Camera<float> camera(opt.width, opt.height);
+        const isin::Vertex<float> light{200.0f, 300.0f, -100.0f};
+        std::uint64_t state = 0x9E3779B97F4A7C15ull;
+        const auto uniform = [&state] { // xorshift64*, in [0, 1)
+            state ^= state >> 12, state ^= state << 25, state ^= state >> 27;
+            return float((state * 0x2545F4914F6CDD1Dull) >> 40) * 0x1p-24f;
+        };
+        for (int ty = 0; ty + 4 <= opt.height; ty += 4)
+            for (int tx = 0; tx + 4 <= opt.width; tx += 4)
+                for (int k = 0; k < 16; ++k)
+                    primary.push_back(camera.primary_ray(float(tx + k % 4), float(ty + k / 4)));
+        std::vector<isin::Hit<float>> hits(primary.size());
+        bvh.intersect(primary.data(), primary.size(), hits.data());
+        for (std::size_t i = 0; i < primary.size(); ++i) {
+            if (!hits[i]) continue;
+            const isin::Ray<float>& ray = primary[i];
+            isin::Vertex<float> n = isin::normalize(isin::normal(tris[hits[i].primitive]));
+            if (isin::dot(n, ray.direction) > 0.0f) n = -n; // the side the eye sees
+            const isin::Vertex<float> origin = isin::offset_origin(ray.at(hits[i].t), n, isin::max_abs(ray.origin));
+            const isin::Vertex<float> to_light = light - origin;
+            if (isin::dot(n, to_light) > 0.0f) {
+                const float distance = isin::length(to_light);
+                shadow.push_back({origin, to_light / distance});
+                shadow_t_max.push_back(distance);
+            }
+            // Cosine-weighted about n (Malley): a point on the unit disc lifted to the hemisphere.
+            const float r = std::sqrt(uniform()), phi = 6.2831853f * uniform();
+            const isin::Vertex<float> a =
+                std::fabs(n.x) > 0.5f ? isin::Vertex<float>{0, 1, 0} : isin::Vertex<float>{1, 0, 0};
+            const isin::Vertex<float> u = isin::normalize(isin::cross(a, n)), v = isin::cross(n, u);
+            const float z = std::sqrt(std::max(0.0f, 1.0f - r * r));
+            diffuse.push_back({origin, isin::normalize(r * std::cos(phi) * u + r * std::sin(phi) * v + z * n)});
+        }
+    }
+
+    // Runs `trace(first, count, totals)` over jobs of `rays` on `threads` threads.
+    template <class Trace>
+    static Totals over(std::size_t rays, int threads, double& seconds, Trace&& trace) {
+        const int jobs = int((rays + job - 1) / job);
+        return run_bands(jobs, threads, seconds, [&](int j, Totals& out) {
+            const std::size_t first = std::size_t(j) * job;
+            trace(first, std::min(job, rays - first), out);
+        });
+    }
+
+    Totals isin_stream(const std::vector<isin::Ray<float>>& rays, int threads, double& s) const {
+        return over(rays.size(), threads, s, [&](std::size_t first, std::size_t n, Totals& out) {
+            isin::Hit<float> hits[job];
+            bvh.intersect(rays.data() + first, n, hits);
+            for (std::size_t i = 0; i < n; ++i)
+                if (hits[i]) ++out.hits, out.sum_t += double(hits[i].t);
+        });
+    }
+    Totals isin_single(const std::vector<isin::Ray<float>>& rays, int threads, double& s) const {
+        return over(rays.size(), threads, s, [&](std::size_t first, std::size_t n, Totals& out) {
+            for (std::size_t i = first; i < first + n; ++i)
+                if (const isin::Hit<float> h = bvh.intersect(rays[i])) ++out.hits, out.sum_t += double(h.t);
+        });
+    }
+    Totals isin_occluded(int threads, double& s) const {
+        return over(shadow.size(), threads, s, [&](std::size_t first, std::size_t n, Totals& out) {
+            std::uint8_t blocked[job];
+            bvh.occluded(shadow.data() + first, n, shadow_t_max.data() + first, blocked);
+            for (std::size_t i = 0; i < n; ++i) out.hits += blocked[i];
+        });
+    }
+    Totals isin_occluded_single(int threads, double& s) const {
+        return over(shadow.size(), threads, s, [&](std::size_t first, std::size_t n, Totals& out) {
+            for (std::size_t i = first; i < first + n; ++i) out.hits += bvh.occluded(shadow[i], shadow_t_max[i]);
+        });
+    }
+    Totals embree1(const std::vector<isin::Ray<float>>& rays, int threads, double& s) const {
+        return over(rays.size(), threads, s, [&](std::size_t first, std::size_t n, Totals& out) {
+            RTCIntersectContext context;
+            rtcInitIntersectContext(&context);
+            for (std::size_t i = first; i < first + n; ++i) {
+                RTCRayHit rh;
+                rh.ray.org_x = rays[i].origin.x, rh.ray.org_y = rays[i].origin.y, rh.ray.org_z = rays[i].origin.z;
+                rh.ray.dir_x = rays[i].direction.x, rh.ray.dir_y = rays[i].direction.y,
+                rh.ray.dir_z = rays[i].direction.z;
+                rh.ray.tnear = 0.0f, rh.ray.tfar = inf, rh.ray.time = 0.0f;
+                rh.ray.mask = ~0u, rh.ray.id = 0, rh.ray.flags = 0;
+                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                rtcIntersect1(scene, &context, &rh);
+                if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) ++out.hits, out.sum_t += double(rh.ray.tfar);
+            }
+        });
+    }
+    // rtcIntersect8 / rtcIntersect16 on consecutive rays; `coherent` sets Embree's hint.
+    template <int N, class RayHitN>
+    Totals embree_n(const std::vector<isin::Ray<float>>& rays, bool coherent, int threads, double& s) const {
+        return over(rays.size(), threads, s, [&](std::size_t first, std::size_t n, Totals& out) {
+            RTCIntersectContext context;
+            rtcInitIntersectContext(&context);
+            if (coherent) context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+            alignas(64) RayHitN rh;
+            alignas(64) int valid[static_cast<std::size_t>(N)];
+            for (std::size_t i = first; i < first + n; i += N) {
+                const int m = int(std::min<std::size_t>(N, first + n - i));
+                to_embree<N>(rays.data() + i, nullptr, m, rh.ray, valid);
+                for (int k = 0; k < N; ++k)
+                    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                if constexpr (N == 8)
+                    rtcIntersect8(valid, scene, &context, &rh);
+                else
+                    rtcIntersect16(valid, scene, &context, &rh);
+                for (int k = 0; k < m; ++k)
+                    if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) ++out.hits, out.sum_t += double(rh.ray.tfar[k]);
+            }
+        });
+    }
+    template <int N, class RayN>
+    Totals embree_occluded_n(int threads, double& s) const {
+        return over(shadow.size(), threads, s, [&](std::size_t first, std::size_t n, Totals& out) {
+            RTCIntersectContext context;
+            rtcInitIntersectContext(&context);
+            context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+            alignas(64) RayN r;
+            alignas(64) int valid[static_cast<std::size_t>(N)];
+            for (std::size_t i = first; i < first + n; i += N) {
+                const int m = int(std::min<std::size_t>(N, first + n - i));
+                to_embree<N>(shadow.data() + i, shadow_t_max.data() + i, m, r, valid);
+                if constexpr (N == 8)
+                    rtcOccluded8(valid, scene, &context, &r);
+                else
+                    rtcOccluded16(valid, scene, &context, &r);
+                for (int k = 0; k < m; ++k) out.hits += r.tfar[k] < 0.0f; // −∞ when occluded
+            }
+        });
+    }
+
+    // One table row per thread count; false when a count or sum disagrees.
+    bool run(const std::string& name, const Options& opt, std::string& out) const {
+        bool ok = true;
+        for (const int threads : opt.threads) {
+            enum {
+                primary_stream,
+                primary_single,
+                primary_e8,
+                primary_e16,
+                shadow_stream,
+                shadow_single,
+                shadow_e8,
+                shadow_e16,
+                diffuse_stream,
+                diffuse_single,
+                diffuse_e1,
+                diffuse_e16,
+                measures
+            };
+            std::vector<double> sec[measures];
+            Totals tot[measures];
+            for (int rep = 0; rep < opt.repeats; ++rep) { // interleaved
+                double t = 0;
+                tot[primary_stream] = isin_stream(primary, threads, t), sec[primary_stream].push_back(t);
+                tot[primary_single] = isin_single(primary, threads, t), sec[primary_single].push_back(t);
+                tot[primary_e8] = embree_n<8, RTCRayHit8>(primary, true, threads, t), sec[primary_e8].push_back(t);
+                tot[primary_e16] = embree_n<16, RTCRayHit16>(primary, true, threads, t), sec[primary_e16].push_back(t);
+                tot[shadow_stream] = isin_occluded(threads, t), sec[shadow_stream].push_back(t);
+                tot[shadow_single] = isin_occluded_single(threads, t), sec[shadow_single].push_back(t);
+                tot[shadow_e8] = embree_occluded_n<8, RTCRay8>(threads, t), sec[shadow_e8].push_back(t);
+                tot[shadow_e16] = embree_occluded_n<16, RTCRay16>(threads, t), sec[shadow_e16].push_back(t);
+                tot[diffuse_stream] = isin_stream(diffuse, threads, t), sec[diffuse_stream].push_back(t);
+                tot[diffuse_single] = isin_single(diffuse, threads, t), sec[diffuse_single].push_back(t);
+                tot[diffuse_e1] = embree1(diffuse, threads, t), sec[diffuse_e1].push_back(t);
+                tot[diffuse_e16] = embree_n<16, RTCRayHit16>(diffuse, false, threads, t), sec[diffuse_e16].push_back(t);
+            }
+            double mrays[measures];
+            for (int m = 0; m < measures; ++m) {
+                const double rays = double(m < shadow_stream    ? primary.size()
+                                           : m < diffuse_stream ? shadow.size()
+                                                                : diffuse.size());
+                mrays[m] = rays / median(sec[m]) * 1e-6;
+            }
+            appendf(out,
+                    "%-15s %3d | %6.2f %6.2f %6.2f %6.2f %6.2f | %6.2f %6.2f %6.2f %6.2f %6.2f | %6.2f %6.2f %6.2f "
+                    "%6.2f %6.2f\n",
+                    name.c_str(), threads, mrays[primary_stream], mrays[primary_single], mrays[primary_e8],
+                    mrays[primary_e16], mrays[primary_stream] / mrays[primary_e16], mrays[shadow_stream],
+                    mrays[shadow_single], mrays[shadow_e8], mrays[shadow_e16], mrays[shadow_stream] / mrays[shadow_e16],
+                    mrays[diffuse_stream], mrays[diffuse_single], mrays[diffuse_e1], mrays[diffuse_e16],
+                    mrays[diffuse_stream] / mrays[diffuse_e1]);
+            // The stream equals isin's single rays exactly; Embree agrees to the tolerance.
+            const auto same = [](const Totals& a, const Totals& b) { return a.hits == b.hits && a.sum_t == b.sum_t; };
+            const auto close = [](const Totals& a, const Totals& b) {
+                return relative(double(a.hits), double(b.hits)) <= tolerance && relative(a.sum_t, b.sum_t) <= tolerance;
+            };
+            const bool row_ok =
+                same(tot[primary_stream], tot[primary_single]) && same(tot[shadow_stream], tot[shadow_single]) &&
+                same(tot[diffuse_stream], tot[diffuse_single]) && close(tot[primary_stream], tot[primary_e16]) &&
+                close(tot[primary_stream], tot[primary_e8]) && close(tot[shadow_stream], tot[shadow_e16]) &&
+                close(tot[shadow_stream], tot[shadow_e8]) && close(tot[diffuse_stream], tot[diffuse_e1]) &&
+                close(tot[diffuse_stream], tot[diffuse_e16]);
+            if (!row_ok)
+                appendf(out,
+                        "  MISMATCH %s: primary hits %llu/%llu/%llu/%llu, occluded %llu/%llu/%llu/%llu, diffuse hits "
+                        "%llu/%llu/%llu/%llu (stream/single/E-8 or E-1/E-16)\n",
+                        name.c_str(), static_cast<unsigned long long>(tot[primary_stream].hits),
+                        static_cast<unsigned long long>(tot[primary_single].hits),
+                        static_cast<unsigned long long>(tot[primary_e8].hits),
+                        static_cast<unsigned long long>(tot[primary_e16].hits),
+                        static_cast<unsigned long long>(tot[shadow_stream].hits),
+                        static_cast<unsigned long long>(tot[shadow_single].hits),
+                        static_cast<unsigned long long>(tot[shadow_e8].hits),
+                        static_cast<unsigned long long>(tot[shadow_e16].hits),
+                        static_cast<unsigned long long>(tot[diffuse_stream].hits),
+                        static_cast<unsigned long long>(tot[diffuse_single].hits),
+                        static_cast<unsigned long long>(tot[diffuse_e1].hits),
+                        static_cast<unsigned long long>(tot[diffuse_e16].hits));
+            ok = ok && row_ok;
+        }
+        return ok;
+    }
+};
+
+void packet_header(const Options& opt, std::string& out) {
+    appendf(out,
+            "\nmany rays at once, Mrays/s (median of %d, interleaved): isin's stream calls (16 consecutive rays = one "
+            "packet) against Embree's packets on the same rays, %dx%d\n"
+            "primary: 4x4-pixel tiles; shadow: the tiles' hits towards the light; diffuse: one cosine-weighted "
+            "bounce per hit (incoherent)\n",
+            opt.repeats, opt.width / 4 * 4, opt.height / 4 * 4);
+    appendf(out, "%-15s %3s | %6s %6s %6s %6s %6s | %6s %6s %6s %6s %6s | %6s %6s %6s %6s %6s\n", "mesh", "thr",
+            "stream", "isin-1", "E-8", "E-16", "s/E16", "occl.", "isin-1", "E-8", "E-16", "s/E16", "stream", "isin-1",
+            "E-1", "E-16", "s/E1");
+}
+
 int build_only(const Options& opt) {
     set_fp_mode();
     const std::vector<Tri> tris = meshes::make<float>(opt.meshes.front());
@@ -378,6 +641,8 @@ int run(const Options& opt) {
     std::printf("%-15s %9s %3s | %8s %8s | %6s %6s %6s %6s | %7s %6s %6s %6s\n", "mesh", "triangles", "thr", "isin",
                 "Embree", "isin", "E-1", "E-16", "isin/1", "rays", "isin", "E-1", "isin/1");
     bool all_ok = true;
+    std::string packet_table;
+    packet_header(opt, packet_table);
     RTCDevice device = new_device(0);
     rtcSetDeviceMemoryMonitorFunction(device, studies::embree_monitor, nullptr);
     for (const std::string& name : opt.meshes) {
@@ -459,8 +724,10 @@ int run(const Options& opt) {
                         builds[ti].isin_ms, builds[ti].isin_cpu, builds[ti].embree_ms, builds[ti].embree_cpu);
         std::printf(" mesh %.2f s, setup %.2f s\n", gen_s, setup_s);
         std::fflush(stdout);
+        all_ok = PacketBench(opt, bvh, scene, tris).run(name, opt, packet_table) && all_ok;
         rtcReleaseScene(scene);
     }
+    std::fputs(packet_table.c_str(), stdout);
     studies::Config cfg;
     cfg.width = std::max(2, opt.width / 2), cfg.height = std::max(2, opt.height / 2), cfg.repeats = opt.repeats;
     all_ok = studies::run(device, cfg, opt.studies) && all_ok;

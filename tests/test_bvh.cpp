@@ -75,21 +75,6 @@ isin::Hit<T> brute_force(const std::vector<isin::Triangle<T>>& tris, const isin:
     return best.t < t_max ? best : isin::Hit<T>{};
 }
 
-template <class T>
-std::vector<isin::Triangle<T>> random_soup(int n, std::uint64_t seed) {
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> uni(-1.0, 1.0);
-    std::vector<isin::Triangle<T>> tris;
-    for (int i = 0; i < n; ++i) {
-        const isin::Vertex<double> c{uni(rng) * 10, uni(rng) * 10, uni(rng) * 10};
-        auto p = [&](double s) {
-            return isin::Vertex<T>{T(c.x + s * uni(rng)), T(c.y + s * uni(rng)), T(c.z + s * uni(rng))};
-        };
-        tris.push_back({p(0.8), p(0.8), p(0.8)});
-    }
-    return tris;
-}
-
 } // namespace
 
 TEST_CASE("Bvh: compiled to the path the build's flags ask for (CI builds each: pure, AVX without FMA, native)") {
@@ -117,7 +102,7 @@ TEST_CASE("Bvh: compiled to the path the build's flags ask for (CI builds each: 
 TEST_CASE_TEMPLATE("BVH: nearest hit and any-hit agree with the brute-force watertight loop", T, float, double) {
     for (int n : {1, 7, 8, 9, 100, 3000}) {
         CAPTURE(n);
-        const auto tris = random_soup<T>(n, std::uint64_t(n));
+        const auto tris = workloads::triangle_soup<T>(n, std::uint64_t(n));
         const isin::Bvh<T> bvh{tris};
         CHECK(bvh.size() == tris.size());
         std::mt19937_64 rng(99);
@@ -218,7 +203,7 @@ TEST_CASE_TEMPLATE("BVH: bad rays and bad triangles are defined misses", T, floa
 }
 
 TEST_CASE("BVH: one-thread and multi-thread builds give the same answers") {
-    const auto tris = random_soup<float>(200000, 5);
+    const auto tris = workloads::triangle_soup<float>(200000, 5);
     isin::BvhOptions one;
     one.threads = 1;
     isin::BvhOptions many;
@@ -433,7 +418,7 @@ TEST_CASE_TEMPLATE("BVH leaves: thin triangles with a vertex near the largest T 
 }
 
 TEST_CASE("BVH build: threads that cannot start leave their work to the others, same answers (D4)") {
-    const auto tris = random_soup<float>(200000, 5);
+    const auto tris = workloads::triangle_soup<float>(200000, 5);
     isin::BvhOptions one;
     one.threads = 1;
     const isin::Bvh<float> reference{tris, one};
@@ -459,7 +444,7 @@ TEST_CASE("BVH build: threads that cannot start leave their work to the others, 
 
 #ifdef ISIN_TEST_REPLACES_NEW
 TEST_CASE("BVH build: std::bad_alloc in a build worker reaches the constructor, not std::terminate (D4)") {
-    const auto tris = random_soup<float>(200000, 5);
+    const auto tris = workloads::triangle_soup<float>(200000, 5);
     isin::BvhOptions options;
     options.threads = 2;
     fail_off_main_thread = true;
@@ -547,7 +532,7 @@ TEST_CASE_TEMPLATE("BVH culling: 20 culled layers in front of a visible face, an
 
 TEST_CASE_TEMPLATE("BVH for_each_hit: every triangle hit in (0, t_max) once, as brute force finds them", T, float,
                    double) {
-    const auto tris = random_soup<T>(3000, 21);
+    const auto tris = workloads::triangle_soup<T>(3000, 21);
     const isin::Bvh<T> bvh{tris};
     std::mt19937_64 rng(5);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -571,7 +556,7 @@ TEST_CASE_TEMPLATE("BVH for_each_hit: every triangle hit in (0, t_max) once, as 
 }
 
 TEST_CASE_TEMPLATE("BVH refit: after the vertices move, hits equal a rebuild's", T, float, double) {
-    isin::Mesh<T> mesh = isin::Mesh<T>::from_triangles(random_soup<T>(5000, 8));
+    isin::Mesh<T> mesh = isin::Mesh<T>::from_triangles(workloads::triangle_soup<T>(5000, 8));
     isin::Bvh<T> bvh{mesh};
     // an animation step: everything swirls and stretches
     for (auto& p : mesh.positions)
@@ -774,7 +759,7 @@ TEST_CASE_TEMPLATE("BvhTree: nodes and leaves hold each usable primitive once, i
 
 TEST_CASE_TEMPLATE("Bvh: one block per leaf holding that leaf's triangles; node and leaf counts are its tree's", T,
                    float, double) {
-    auto tris = random_soup<T>(300, 9);
+    auto tris = workloads::triangle_soup<T>(300, 9);
     tris[10] = {{1, 1, 1}, {2, 2, 2}, {3, 3, 3}};        // zero area
     tris[20].v1.x = std::numeric_limits<T>::quiet_NaN(); // not finite
     const auto check_blocks = [&tris](const isin::Bvh<T>& bvh) {

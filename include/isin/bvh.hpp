@@ -5,6 +5,7 @@
 ///  - bvh/build.hpp     build_bvh: binned SAH on several threads, collapsed to 8-wide nodes for the
 ///                      least SAH cost (Ylitie, Karras & Laine 2017); any input builds
 ///  - bvh/traverse.hpp  traverse<Visit>: the caller's leaf test for the nearest, any or all hits
+///  - bvh/packet.hpp   walk_packet: 16 coherent rays at once, one interval test per node
 ///  - bvh/triangles.hpp the triangle leaves: blocks of 8, the watertight test on 8 lanes
 ///                      (triangles_avx2.hpp: its AVX2 + FMA form)
 ///  - bvh/triangle_bvh.hpp  Bvh<T>: all of it for triangles, with culling and skip filters
@@ -12,6 +13,7 @@
 ///     isin::Bvh<float> bvh{triangles};          // std::vector<isin::Triangle<float>> or isin::Mesh<float>
 ///     if (auto h = bvh.intersect(ray)) use(h.t, h.u, h.v, h.primitive);
 ///     bool shadowed = bvh.occluded(shadow_ray, distance_to_light);
+///     bvh.intersect(rays, count, hits);   // a stream: 4×4 tiles of rays go as packets
 ///
 ///     // any primitive: a tree over their boxes, and a leaf test of your own
 ///     auto tree = isin::build_bvh<float>(n, [&](std::size_t i) { return box_of(i); });
@@ -23,6 +25,7 @@
 ///     });
 #include "bvh/box.hpp"
 #include "bvh/build.hpp"
+#include "bvh/packet.hpp"
 #include "bvh/traverse.hpp"
 #include "bvh/tree.hpp"
 #include "bvh/triangle_bvh.hpp"

@@ -1,5 +1,7 @@
 #pragma once
 /// isin — the ray of note §3: R(t) = Ro + t·Rd.
+#include <cstddef>
+
 #include "vec.hpp"
 
 namespace isin {
@@ -14,6 +16,18 @@ struct Ray {
     /// The point at parameter t (§3): R(t) = Ro + t·Rd.
     [[nodiscard]] constexpr Vertex<T> at(T t) const noexcept {
         return origin + t * direction; // §3: Ro + t·Rd
+    }
+};
+
+/// Rays kept as six arrays (structure of arrays), for the stream calls of Bvh and Scene: ray i
+/// starts at (ox[i], oy[i], oz[i]) and goes along (dx[i], dy[i], dz[i]).
+template <class T>
+struct RaysSoA {
+    static_assert(std::is_floating_point_v<T>, "isin::RaysSoA needs a floating-point type");
+    const T *ox, *oy, *oz, *dx, *dy, *dz;
+    /// Ray i.
+    [[nodiscard]] constexpr Ray<T> operator[](std::size_t i) const noexcept {
+        return {{ox[i], oy[i], oz[i]}, {dx[i], dy[i], dz[i]}};
     }
 };
 

@@ -319,4 +319,20 @@ std::vector<isin::Ray<T>> timing_rays(std::uint64_t seed = 13) {
     return rays;
 }
 
+/// n random triangles: centres uniform in [−10, 10]³, corners within ±`size` of them on each axis.
+template <class T>
+std::vector<isin::Triangle<T>> triangle_soup(int n, std::uint64_t seed, double size = 0.8) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    std::vector<isin::Triangle<T>> tris;
+    for (int i = 0; i < n; ++i) {
+        const isin::Vertex<double> c{uni(rng) * 10, uni(rng) * 10, uni(rng) * 10};
+        auto p = [&](double s) {
+            return isin::Vertex<T>{T(c.x + s * uni(rng)), T(c.y + s * uni(rng)), T(c.z + s * uni(rng))};
+        };
+        tris.push_back({p(size), p(size), p(size)});
+    }
+    return tris;
+}
+
 } // namespace workloads

@@ -1,9 +1,11 @@
 #pragma once
 /// isin — Bvh<T>: a BvhTree over triangles with their blocks, and the leaf tests for the nearest
 /// hit, any hit and every hit, with backface culling and a skip mask as filters of the leaf test.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include "../hit.hpp"
@@ -11,6 +13,7 @@
 #include "../ray.hpp"
 #include "../triangle.hpp"
 #include "build.hpp"
+#include "packet.hpp"
 #include "traverse.hpp"
 #include "tree.hpp"
 #include "triangles.hpp"
@@ -82,7 +85,8 @@ public:
 
     /// Nearest hit with t in (0, t_max), watertight: a ray through an edge shared by two
     /// triangles hits at least one of them. Any direction works (t in units of |direction|).
-    /// The hit's `primitive` is the triangle's index.
+    /// The hit's `primitive` is the triangle's index; of triangles hit at the same t, the lowest
+    /// index (whatever the order of the tree).
     [[nodiscard]] Hit<T> intersect(const Ray<T>& ray, T t_max = std::numeric_limits<T>::infinity(),
                                    const HitFilter& filter = {}) const noexcept {
         Hit<T> best;
@@ -90,12 +94,7 @@ public:
         detail::TriangleRay<T> r(ray);
         const auto nearest = [&](auto cull) {
             traverse<Visit::nearest>(tree_, ray, t, [&](std::uint32_t leaf, T& t_far) {
-                detail::LaneHits<T> hits;
-                const unsigned lanes = lanes_hit<decltype(cull)::value>(leaf, r, t_far, hits, filter.skip);
-                if (!lanes) return false;
-                const int k = detail::nearest_lane(lanes, hits);
-                t_far = hits.t[k];
-                best = {hits.t[k], hits.u[k], hits.v[k], blocks_[leaf].primitive[k]};
+                take_nearest<decltype(cull)::value>(leaf, r, t_far, best, filter.skip);
                 return false;
             });
         };
@@ -121,6 +120,36 @@ public:
             });
         };
         return filter.cull_backfaces ? any(std::true_type{}) : any(std::false_type{});
+    }
+
+    /// Nearest hits of a stream of rays: hits[i] = intersect(rays[i], ∞, filter) for i < count,
+    /// the same hits bit for bit. Rays are taken 16 at a time; 16 consecutive rays that start
+    /// close together and point the same way (a 4×4 tile of camera rays, shadow rays from such a
+    /// tile towards one light) are traced as one packet (float with AVX2 + FMA), faster than
+    /// one by one; rays that are not go one by one, no slower than intersect(ray).
+    void intersect(const Ray<T>* rays, std::size_t count, Hit<T>* hits, const HitFilter& filter = {}) const noexcept {
+        intersect(rays, count, nullptr, hits, filter);
+    }
+    /// As above with a bound per ray: hits[i] = intersect(rays[i], t_max[i], filter).
+    void intersect(const Ray<T>* rays, std::size_t count, const T* t_max, Hit<T>* hits,
+                   const HitFilter& filter = {}) const noexcept {
+        stream<Visit::nearest>([rays](std::size_t i) { return rays[i]; }, count, t_max, hits, nullptr, filter);
+    }
+    /// As above, the rays as separate arrays (RaysSoA); t_max may be null (no bound).
+    void intersect(const RaysSoA<T>& rays, std::size_t count, const T* t_max, Hit<T>* hits,
+                   const HitFilter& filter = {}) const noexcept {
+        stream<Visit::nearest>([&rays](std::size_t i) { return rays[i]; }, count, t_max, hits, nullptr, filter);
+    }
+    /// Shadow rays of a stream: blocked[i] = occluded(rays[i], t_max[i], filter) (1 or 0) for
+    /// i < count; packets as for intersect.
+    void occluded(const Ray<T>* rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
+                  const HitFilter& filter = {}) const noexcept {
+        stream<Visit::any>([rays](std::size_t i) { return rays[i]; }, count, t_max, nullptr, blocked, filter);
+    }
+    /// As above, the rays as separate arrays.
+    void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
+                  const HitFilter& filter = {}) const noexcept {
+        stream<Visit::any>([&rays](std::size_t i) { return rays[i]; }, count, t_max, nullptr, blocked, filter);
     }
 
     /// Calls f(index, hit) for every triangle hit with t in (0, t_max), once each, in no
@@ -190,6 +219,104 @@ public:
     }
 
 private:
+    // The nearest hit of leaf `leaf` into `best` when it is nearer than best, or ties with it
+    // with a lower index. The traversal's bound then stays a little beyond the hit (2⁻¹⁶ of
+    // its t): a box's computed entry and a triangle's computed t each round a few ulps their own
+    // way, and every triangle that ties with the hit must still be tested, whatever the order
+    // the leaves come in, for the lowest index to win on every path (single rays and packets).
+    template <bool cull>
+    void take_nearest(std::uint32_t leaf, detail::TriangleRay<T>& r, T& t_far, Hit<T>& best,
+                      const std::uint8_t* skip) const noexcept {
+        detail::LaneHits<T> hits;
+        const unsigned lanes = lanes_hit<cull>(leaf, r, t_far, hits, skip);
+        if (!lanes) return;
+        const auto& block = blocks_[leaf];
+        const int k = detail::nearest_lane(lanes, hits, block);
+        if (hits.t[k] > best.t || (hits.t[k] == best.t && block.primitive[k] > best.primitive)) return;
+        best = {hits.t[k], hits.u[k], hits.v[k], block.primitive[k]};
+        t_far = best.t + best.t * T(0x1p-16);
+    }
+
+    // Up to 16 rays of a stream: nearest hits (visit = nearest, into hits) or occlusion (into
+    // blocked). Coherent rays go as a packet (packet.hpp), the others one by one.
+    template <Visit visit, class RayAt>
+    void trace_chunk(const RayAt& ray_at, std::size_t first, int n, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
+                     const HitFilter& filter) const noexcept {
+        unsigned packed = 0;
+#if defined(ISIN_DETAIL_PACKETS)
+        if constexpr (std::is_same_v<T, float>) {
+            if (n > 1 && !tree_.empty()) packed = trace_packet<visit>(ray_at, first, n, t_max, hits, blocked, filter);
+        }
+#endif
+        for (int k = 0; k < n; ++k) {
+            if ((packed >> k) & 1u) continue;
+            const std::size_t i = first + std::size_t(k);
+            const T limit = t_max ? t_max[i] : std::numeric_limits<T>::infinity();
+            if constexpr (visit == Visit::nearest)
+                hits[i] = intersect(ray_at(i), limit, filter);
+            else
+                blocked[i] = occluded(ray_at(i), limit, filter) ? 1 : 0;
+        }
+    }
+
+#if defined(ISIN_DETAIL_PACKETS)
+    // The packet part of trace_chunk (float): returns the rays it traced.
+    template <Visit visit, class RayAt>
+    unsigned trace_packet(const RayAt& ray_at, std::size_t first, int n, const float* t_max, Hit<float>* hits,
+                          std::uint8_t* blocked, const HitFilter& filter) const noexcept {
+        constexpr int size = detail::RayPacket::size;
+        alignas(32) float c[6][size]; // the rays, lane by lane
+        float limit[size];
+        for (int k = 0; k < size; ++k) {
+            const std::size_t i = first + std::size_t(k < n ? k : 0);
+            const Ray<float> r = ray_at(i);
+            c[0][k] = r.origin.x, c[1][k] = r.origin.y, c[2][k] = r.origin.z;
+            c[3][k] = r.direction.x, c[4][k] = r.direction.y, c[5][k] = r.direction.z;
+            limit[k] = t_max ? t_max[i] : std::numeric_limits<float>::infinity();
+        }
+        detail::RayPacket p;
+        const unsigned lanes = detail::make_packet(p, c, n, limit, tree_.bound());
+        if (!lanes) return 0;
+        detail::TriangleRay<float> tri[size];
+        Hit<float> best[size];
+        for (unsigned l = lanes; l; l &= l - 1) {
+            const int k = detail::lowest_bit(l);
+            tri[k].reset({{c[0][k], c[1][k], c[2][k]}, {c[3][k], c[4][k], c[5][k]}});
+        }
+        const auto walk = [&](auto cull) {
+            constexpr bool culls = decltype(cull)::value;
+            detail::walk_packet<visit>(tree_, p, [&](std::uint32_t leaf, unsigned active, float(&t_far)[16]) {
+                unsigned done = 0;
+                for (; active; active &= active - 1) {
+                    const int k = detail::lowest_bit(active);
+                    if constexpr (visit == Visit::nearest) {
+                        take_nearest<culls>(leaf, tri[k], t_far[k], best[k], filter.skip);
+                    } else {
+                        detail::LaneHits<float> unused;
+                        if (filter.skip ? lanes_hit<culls>(leaf, tri[k], t_far[k], unused, filter.skip) != 0
+                                        : tri[k].ready() && detail::test_block<culls, false>(blocks_[leaf], tri[k],
+                                                                                             t_far[k], unused) != 0)
+                            done |= 1u << k;
+                    }
+                }
+                return done;
+            });
+        };
+        if (filter.cull_backfaces)
+            walk(std::true_type{});
+        else
+            walk(std::false_type{});
+        for (unsigned l = lanes; l; l &= l - 1) {
+            const int k = detail::lowest_bit(l);
+            if constexpr (visit == Visit::nearest)
+                hits[first + std::size_t(k)] = best[k];
+            else
+                blocked[first + std::size_t(k)] = (p.lanes >> k) & 1u ? 0 : 1; // left the packet: blocked
+        }
+        return lanes;
+    }
+#endif
+
     // The lanes of leaf `leaf` hit with 0 < t < t_max, without the skipped triangles.
     template <bool cull>
     unsigned lanes_hit(std::uint32_t leaf, detail::TriangleRay<T>& r, T t_max, detail::LaneHits<T>& hits,
@@ -203,6 +330,14 @@ private:
                 if (skip[block.primitive[k]]) lanes &= ~(1u << k);
             }
         return lanes;
+    }
+
+    template <Visit visit, class RayAt>
+    void stream(const RayAt& ray_at, std::size_t count, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
+                const HitFilter& filter) const noexcept {
+        for (std::size_t first = 0; first < count; first += 16)
+            trace_chunk<visit>(ray_at, first, int(std::min<std::size_t>(16, count - first)), t_max, hits, blocked,
+                               filter);
     }
 
     template <class TriangleOf>

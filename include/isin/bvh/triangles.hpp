@@ -48,8 +48,15 @@ struct TriangleRay {
     WatertightShear<T> shear;
     bool sheared = false, usable = false;
 
+    TriangleRay() noexcept = default;
     explicit TriangleRay(const Ray<T>& ray) noexcept
         : org{ray.origin.x, ray.origin.y, ray.origin.z}, dir(ray.direction) {}
+    /// Starts over with `ray`, in place (an array of them need not be copied into).
+    void reset(const Ray<T>& ray) noexcept {
+        org[0] = ray.origin.x, org[1] = ray.origin.y, org[2] = ray.origin.z;
+        dir = ray.direction;
+        sheared = false;
+    }
     /// Sets the shear on first use; false for a zero or NaN direction (no hit then).
     bool ready() noexcept {
         if (!sheared) sheared = true, usable = shear.set(dir);
@@ -149,13 +156,15 @@ template <bool cull, bool store = true, class T>
 #endif
 }
 
-/// The lowest lane with the least t among `lanes` (≠ 0): the nearest hit, ties to the lower lane.
+/// The lane with the least t among `lanes` (≠ 0): the nearest hit; of equal t, the lowest
+/// primitive index, so that the nearest hit does not depend on the order leaves are visited in.
 template <class T>
-[[nodiscard]] inline int nearest_lane(unsigned lanes, const LaneHits<T>& hits) noexcept {
+[[nodiscard]] inline int nearest_lane(unsigned lanes, const LaneHits<T>& hits, const TriangleBlock<T>& b) noexcept {
     int best = -1;
     for (; lanes; lanes &= lanes - 1) {
         const int k = lowest_bit(lanes);
-        if (best < 0 || hits.t[k] < hits.t[best]) best = k;
+        if (best < 0 || hits.t[k] < hits.t[best] || (hits.t[k] == hits.t[best] && b.primitive[k] < b.primitive[best]))
+            best = k;
     }
     return best;
 }

@@ -1,0 +1,296 @@
+#pragma once
+/// isin — tracing up to 16 coherent rays through a BvhTree together, with the caller's leaf test
+/// (the packet form of traverse.hpp). Each node is tested once for the whole packet, by interval
+/// arithmetic over the packet's origins and inverse directions (Boulos et al. 2007, "Packet-based
+/// Whitted and distribution ray tracing"; Wald et al. 2007, "Ray tracing deformable scenes using
+/// dynamic bounding volume hierarchies"): one 8-lane test like a single ray's, shared by 16 rays.
+/// The interval test is conservative, so the packet visits every node any of its rays enters;
+/// at a leaf each ray then takes the single-ray slab test of the leaf's box (traverse.hpp's
+/// fast form, the same arithmetic lane by lane), and only the rays it lets in reach the leaf.
+/// Packets need AVX + FMA and float (ISIN_DETAIL_PACKETS); callers fall back to single rays
+/// elsewhere, and for rays that are not coherent (make_packet says which).
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+
+#include "traverse.hpp"
+#include "tree.hpp"
+
+#if defined(ISIN_DETAIL_SLABS_AVX) && defined(__FMA__)
+#define ISIN_DETAIL_PACKETS 1
+
+namespace isin {
+namespace detail {
+
+/// The slab constants of up to 16 rays (lanes = rays, SlabRay's fast form) and the intervals
+/// the packet's node test works with.
+struct alignas(32) RayPacket {
+    static constexpr int size = 16;
+    float inv[3][size], org_inv_near[3][size], inv_far[3][size], org_inv_far[3][size];
+    /// Per ray: hits count below this (the leaf lowers it); −1 for lanes not (or no longer) traced.
+    float t_far[size];
+    // Per axis: the origin that gives the earliest entry (latest exit), the range of inv
+    // (inv_far), and an absolute allowance for the rounding of both the rays' own slab
+    // distances and the interval products.
+    float entry_org[3], exit_org[3], inv_lo[3], inv_hi[3], far_lo[3], far_hi[3], margin[3];
+    std::size_t near_plane[3], far_plane[3]; // shared by every ray: one octant
+    unsigned lanes = 0;                      // rays in the packet
+};
+
+/// The cosine of the widest angle between the rays of a packet: beyond it rays go one by one
+/// (the interval test of a packet spread wider lets in many nodes that few of its rays enter).
+inline constexpr float packet_cone_cos = 0.995f;
+
+// The least and the greatest of 16 lanes (two registers).
+inline float lanes_min(__m256 a, __m256 b) noexcept {
+    const __m256 m = _mm256_min_ps(a, b);
+    __m128 h = _mm_min_ps(_mm256_castps256_ps128(m), _mm256_extractf128_ps(m, 1));
+    h = _mm_min_ps(h, _mm_movehl_ps(h, h));
+    return _mm_cvtss_f32(_mm_min_ss(h, _mm_shuffle_ps(h, h, 1)));
+}
+inline float lanes_max(__m256 a, __m256 b) noexcept {
+    const __m256 m = _mm256_max_ps(a, b);
+    __m128 h = _mm_max_ps(_mm256_castps256_ps128(m), _mm256_extractf128_ps(m, 1));
+    h = _mm_max_ps(h, _mm_movehl_ps(h, h));
+    return _mm_cvtss_f32(_mm_max_ss(h, _mm_shuffle_ps(h, h, 1)));
+}
+
+/// Sets up `p` from the rays in `c` (origin x, y, z, direction x, y, z; lane k = ray k < n ≤ 16)
+/// and their bounds t_max[0, n). First the packet: the rays with a finite, non-zero direction
+/// and t_max > 0 that share the first such ray's octant and lie within packet_cone_cos of its
+/// direction; then, eight lanes at a time, their slab constants by prepare_slab's rules (so as
+/// conservative), dropping any whose products could overflow (prepare_slab's robust form).
+/// Returns the rays in the packet (p.lanes), at least two, or 0; the others are for the
+/// single-ray path.
+inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], int n, const float* t_max,
+                            float bound) noexcept {
+    for (int k = 0; k < RayPacket::size; ++k) p.t_far[k] = k < n ? t_max[k] : -1.0f;
+    const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)), zero = _mm256_setzero_ps();
+    // The rays that may join, and their octants (sign bits): cheap tests first, so that an
+    // incoherent stream costs little here.
+    unsigned usable = 0, octant[3] = {0, 0, 0};
+    for (int g = 0; g < RayPacket::size; g += 8) {
+        __m256 ok = _mm256_cmp_ps(_mm256_load_ps(p.t_far + g), zero, _CMP_GT_OQ), d_max = zero;
+        for (int a = 0; a < 3; ++a) {
+            const __m256 o = _mm256_load_ps(c[a] + g), d = _mm256_load_ps(c[3 + a] + g);
+            const __m256 finite = _mm256_cmp_ps(_mm256_add_ps(_mm256_sub_ps(o, o), _mm256_sub_ps(d, d)), zero, _CMP_EQ_OQ);
+            ok = _mm256_and_ps(ok, finite);
+            d_max = _mm256_max_ps(d_max, _mm256_and_ps(d, magnitude));
+            octant[a] |= unsigned(_mm256_movemask_ps(d)) << g;
+        }
+        ok = _mm256_and_ps(ok, _mm256_cmp_ps(d_max, zero, _CMP_GT_OQ));
+        usable |= unsigned(_mm256_movemask_ps(ok)) << g;
+    }
+    if (!(usable & (usable - 1))) return 0; // fewer than two
+    const int first = lowest_bit(usable);
+    unsigned lanes = usable;
+    for (int a = 0; a < 3; ++a) lanes &= (octant[a] >> first) & 1u ? octant[a] : ~octant[a];
+    if (!(lanes & (lanes - 1))) return 0;
+    // Within the cone: d·d0 ≥ cos·|d|·|d0|.
+    const float d0x = c[3][first], d0y = c[4][first], d0z = c[5][first];
+    const float len0 = std::sqrt(d0x * d0x + d0y * d0y + d0z * d0z);
+    unsigned cone = 0;
+    for (int g = 0; g < RayPacket::size; g += 8) {
+        const __m256 dx = _mm256_load_ps(c[3] + g), dy = _mm256_load_ps(c[4] + g), dz = _mm256_load_ps(c[5] + g);
+        const __m256 dd = _mm256_fmadd_ps(dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dx, dx)));
+        const __m256 d_d0 = _mm256_fmadd_ps(dz, _mm256_set1_ps(d0z),
+                                            _mm256_fmadd_ps(dy, _mm256_set1_ps(d0y), _mm256_mul_ps(dx, _mm256_set1_ps(d0x))));
+        const __m256 bound_cos = _mm256_mul_ps(_mm256_set1_ps(packet_cone_cos * len0), _mm256_sqrt_ps(dd));
+        cone |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(d_d0, bound_cos, _CMP_GE_OQ))) << g;
+    }
+    lanes &= cone;
+    if (!(lanes & (lanes - 1))) return 0;
+    // The slab constants, as prepare_slab's fast form; a lane whose products could overflow
+    // leaves the packet.
+    constexpr float u = std::numeric_limits<float>::epsilon() / 2;
+    constexpr float widen = 1.0f + 2.0f * (3.0f * u / (1.0f - 3.0f * u)); // as prepare_slab
+    constexpr float allowance = 4.0f * std::numeric_limits<float>::epsilon();
+    const __m256 no_overflow = _mm256_set1_ps(std::numeric_limits<float>::max() / 8.0f);
+    unsigned fast = 0;
+    for (int g = 0; g < RayPacket::size; g += 8) {
+        __m256 ok = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        for (int a = 0; a < 3; ++a) {
+            const __m256 o = _mm256_load_ps(c[a] + g), d = _mm256_load_ps(c[3 + a] + g);
+            const __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), d), inv_far = _mm256_mul_ps(inv, _mm256_set1_ps(widen));
+            // max(bound, |o|)·|inv_far| below max/8 (false for an infinite inv)
+            ok = _mm256_and_ps(
+                ok, _mm256_cmp_ps(_mm256_mul_ps(_mm256_max_ps(_mm256_and_ps(o, magnitude), _mm256_set1_ps(bound)),
+                                                _mm256_and_ps(inv_far, magnitude)),
+                                  no_overflow, _CMP_LT_OQ));
+            const __m256 org_inv = _mm256_mul_ps(o, inv), org_inv_far = _mm256_mul_ps(o, inv_far);
+            _mm256_store_ps(p.inv[a] + g, inv);
+            _mm256_store_ps(p.inv_far[a] + g, inv_far);
+            _mm256_store_ps(p.org_inv_near[a] + g,
+                            _mm256_fmadd_ps(_mm256_set1_ps(allowance), _mm256_and_ps(org_inv, magnitude), org_inv));
+            _mm256_store_ps(p.org_inv_far[a] + g, _mm256_fnmadd_ps(_mm256_set1_ps(allowance),
+                                                                   _mm256_and_ps(org_inv_far, magnitude), org_inv_far));
+        }
+        fast |= unsigned(_mm256_movemask_ps(ok)) << g;
+    }
+    lanes &= fast;
+    if (!(lanes & (lanes - 1))) return 0;
+    p.lanes = lanes;
+    // Lanes outside the packet: never entered (t_far < 0), and out of the intervals.
+    const __m256 in[2] = {_mm256_castsi256_ps(_mm256_cmpgt_epi32(
+                              _mm256_and_si256(_mm256_set1_epi32(int(lanes)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                              _mm256_setzero_si256())),
+                          _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+                              _mm256_and_si256(_mm256_set1_epi32(int(lanes >> 8)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                              _mm256_setzero_si256()))};
+    const __m256 pos_inf = _mm256_set1_ps(std::numeric_limits<float>::infinity()), neg_inf = _mm256_set1_ps(-std::numeric_limits<float>::infinity());
+    for (int g = 0; g < 2; ++g)
+        _mm256_store_ps(p.t_far + 8 * g, _mm256_blendv_ps(_mm256_set1_ps(-1.0f), _mm256_load_ps(p.t_far + 8 * g), in[g]));
+    const auto lo = [&](const float* v) {
+        return lanes_min(_mm256_blendv_ps(pos_inf, _mm256_load_ps(v), in[0]), _mm256_blendv_ps(pos_inf, _mm256_load_ps(v + 8), in[1]));
+    };
+    const auto hi = [&](const float* v) {
+        return lanes_max(_mm256_blendv_ps(neg_inf, _mm256_load_ps(v), in[0]), _mm256_blendv_ps(neg_inf, _mm256_load_ps(v + 8), in[1]));
+    };
+    using Node = BvhTree<float>::Node;
+    for (int a = 0; a < 3; ++a) {
+        const bool positive = !((octant[a] >> first) & 1u);
+        const std::size_t lo_plane = std::size_t(a) * sizeof(Node::lo[0]), hi_plane = sizeof(Node::lo) + lo_plane;
+        p.near_plane[a] = positive ? lo_plane : hi_plane;
+        p.far_plane[a] = positive ? hi_plane : lo_plane;
+        // Entry (p − o)·inv is least at the largest p − o along the direction's sign: the
+        // farthest-forward origin; the exit is greatest at the farthest-back one.
+        const float o_lo = lo(c[a]), o_hi = hi(c[a]);
+        p.entry_org[a] = positive ? o_hi : o_lo;
+        p.exit_org[a] = positive ? o_lo : o_hi;
+        p.inv_lo[a] = lo(p.inv[a]), p.inv_hi[a] = hi(p.inv[a]);
+        p.far_lo[a] = lo(p.inv_far[a]), p.far_hi[a] = hi(p.inv_far[a]);
+        // Each ray's fast slab distance p·inv − o·inv is within 6ε(|p| + |o|)|inv| of the exact
+        // one (prepare_slab's allowance included), and the interval products within 2u of theirs;
+        // |p| ≤ the tree's bound. 32ε covers both with room.
+        const float o_max = std::max(std::fabs(o_lo), std::fabs(o_hi));
+        const float inv_max = std::max(std::fabs(p.far_lo[a]), std::fabs(p.far_hi[a]));
+        p.margin[a] = 32 * std::numeric_limits<float>::epsilon() * (bound + o_max) * inv_max;
+    }
+    return lanes;
+}
+
+/// The interval slab test of a node's 8 children for the whole packet: bit k set when some ray
+/// of it may enter child k before `t_far` (every child a ray of the packet enters is set);
+/// `t_near` gets a lower bound of the rays' entry distances.
+inline unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPacket& p, float t_far,
+                                    float (&t_near)[8]) noexcept {
+    __m256 tn = _mm256_setzero_ps(), tf = _mm256_set1_ps(t_far);
+    for (int a = 0; a < 3; ++a) {
+        const __m256 margin = _mm256_set1_ps(p.margin[a]);
+        const __m256 dn = _mm256_sub_ps(_mm256_load_ps(plane<float>(n, p.near_plane[a])), _mm256_set1_ps(p.entry_org[a]));
+        const __m256 df = _mm256_sub_ps(_mm256_load_ps(plane<float>(n, p.far_plane[a])), _mm256_set1_ps(p.exit_org[a]));
+        const __m256 entry = _mm256_min_ps(_mm256_mul_ps(dn, _mm256_set1_ps(p.inv_lo[a])),
+                                           _mm256_mul_ps(dn, _mm256_set1_ps(p.inv_hi[a])));
+        const __m256 exit = _mm256_max_ps(_mm256_mul_ps(df, _mm256_set1_ps(p.far_lo[a])),
+                                          _mm256_mul_ps(df, _mm256_set1_ps(p.far_hi[a])));
+        tn = _mm256_max_ps(tn, _mm256_sub_ps(entry, margin));
+        tf = _mm256_min_ps(tf, _mm256_add_ps(exit, margin));
+    }
+    _mm256_storeu_ps(t_near, tn);
+    return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ)));
+}
+
+/// Which rays of the packet enter child `k` of `n` before their own t_far: hit_children's fast
+/// form, lane by lane, on the rays instead of the children.
+inline unsigned packet_rays_entering(const BvhTree<float>::Node& n, int k, const RayPacket& p) noexcept {
+    unsigned rays = 0;
+    for (int g = 0; g < RayPacket::size; g += 8) {
+        __m256 t0[3], t1[3];
+        for (int a = 0; a < 3; ++a) {
+            const __m256 near_plane = _mm256_set1_ps(plane<float>(n, p.near_plane[a])[k]);
+            const __m256 far_plane = _mm256_set1_ps(plane<float>(n, p.far_plane[a])[k]);
+            t0[a] = _mm256_fmsub_ps(near_plane, _mm256_load_ps(p.inv[a] + g), _mm256_load_ps(p.org_inv_near[a] + g));
+            t1[a] = _mm256_fmsub_ps(far_plane, _mm256_load_ps(p.inv_far[a] + g), _mm256_load_ps(p.org_inv_far[a] + g));
+        }
+        const __m256 tn = _mm256_max_ps(_mm256_max_ps(t0[0], t0[1]), _mm256_max_ps(t0[2], _mm256_setzero_ps()));
+        const __m256 tf = _mm256_min_ps(_mm256_min_ps(t1[0], t1[1]), _mm256_min_ps(t1[2], _mm256_load_ps(p.t_far + g)));
+        rays |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ))) << g;
+    }
+    return rays;
+}
+
+// The largest t_far of the rays still traced.
+inline float packet_t_far(const RayPacket& p) noexcept {
+    const __m256 m = _mm256_max_ps(_mm256_load_ps(p.t_far), _mm256_load_ps(p.t_far + 8));
+    __m128 h = _mm_max_ps(_mm256_castps256_ps128(m), _mm256_extractf128_ps(m, 1));
+    h = _mm_max_ps(h, _mm_movehl_ps(h, h));
+    h = _mm_max_ss(h, _mm_shuffle_ps(h, h, 1));
+    return _mm_cvtss_f32(h);
+}
+
+/// Traces the packet through `tree`, nearest-first by the packet's entry bounds (Visit::nearest)
+/// or in any order (Visit::any). At each leaf whose box some of its rays enter, calls
+/// `leaf(leaf_index, rays, p.t_far)` with the mask of those rays; the leaf lowers their t_far
+/// (nearest) and returns the rays it is done with (any: they leave the packet). Stops when the
+/// stack is empty or no ray is left.
+template <Visit visit, class Leaf>
+void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
+    using Node = BvhTree<float>::Node;
+    constexpr std::uint32_t leaf_bit = BvhTree<float>::leaf_bit;
+    struct Entry {
+        std::uint32_t ref;
+        float t;
+        std::uint32_t parent, slot; // where the entry's box is: child `slot` of node `parent`
+    };
+    Entry stack[7 * BvhTree<float>::depth_limit + 1];
+    int top = 0;
+    std::uint32_t ref = 0, parent = 0, slot = 0;
+    const Node* const nodes = tree.nodes().data();
+    float t_packet = packet_t_far(p);
+    if (!(t_packet > 0.0f)) return;
+    for (;;) {
+        if (ref & leaf_bit) {
+            const unsigned rays = packet_rays_entering(nodes[parent], int(slot), p) & p.lanes;
+            if (rays) {
+                const unsigned done = leaf(ref & ~leaf_bit, rays, p.t_far);
+                if (done) {
+                    p.lanes &= ~done;
+                    for (unsigned d = done; d; d &= d - 1) p.t_far[lowest_bit(d)] = -1.0f;
+                    if (!p.lanes) return;
+                }
+                t_packet = packet_t_far(p);
+            }
+        } else {
+            const Node& n = nodes[ref];
+            float t_near[8];
+            unsigned mask = packet_hit_children(n, p, t_packet, t_near);
+            if (mask) {
+                int k = lowest_bit(mask);
+                mask &= mask - 1;
+                if (!mask) { // one child: go on with it
+                    parent = ref, slot = std::uint32_t(k), ref = n.child[k];
+                    continue;
+                }
+                const int first = top;
+                stack[top++] = {n.child[k], t_near[k], ref, std::uint32_t(k)};
+                while (mask) {
+                    k = lowest_bit(mask);
+                    mask &= mask - 1;
+                    stack[top++] = {n.child[k], t_near[k], ref, std::uint32_t(k)};
+                }
+                if constexpr (visit == Visit::nearest)
+                    for (int i = first + 1; i < top; ++i) { // insertion sort, descending t
+                        const Entry c = stack[i];
+                        int j = i;
+                        while (j > first && stack[j - 1].t < c.t) stack[j] = stack[j - 1], --j;
+                        stack[j] = c;
+                    }
+                const Entry& e = stack[--top];
+                ref = e.ref, parent = e.parent, slot = e.slot;
+                continue;
+            }
+        }
+        for (;;) { // the next entry some ray may still reach
+            if (top == 0) return;
+            const Entry& e = stack[--top];
+            if (e.t < t_packet) {
+                ref = e.ref, parent = e.parent, slot = e.slot;
+                break;
+            }
+        }
+    }
+}
+
+} // namespace detail
+} // namespace isin
+#endif

@@ -1,0 +1,212 @@
+// Bvh's stream calls (bvh/packet.hpp behind them) give, ray for ray, the single-ray calls' results
+// bit for bit: coherent tiles of camera rays (packets), random rays (one by one), and rays that
+// break packets (NaN, zero direction, axis-parallel, −0.0, bad t_max) mixed into them.
+#include <isin/bvh.hpp>
+
+#include <doctest/doctest.h>
+
+#include "common/workloads.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace {
+
+template <class T>
+bool same_bits(T a, T b) {
+    return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+template <class T>
+bool same_hit(const isin::Hit<T>& a, const isin::Hit<T>& b) {
+    return same_bits(a.t, b.t) && same_bits(a.u, b.u) && same_bits(a.v, b.v) && a.primitive == b.primitive;
+}
+
+/// Counts the rays whose stream results differ from the single-ray calls' (nearest hit, and
+/// occlusion up to `limit`), through the array and the structure-of-arrays forms.
+template <class T>
+int stream_mismatches(const isin::Bvh<T>& bvh, const std::vector<isin::Ray<T>>& rays, const std::vector<T>& limit,
+                      const isin::HitFilter& filter = {}) {
+    const std::size_t n = rays.size();
+    std::vector<isin::Hit<T>> hits(n), hits_soa(n), bounded(n);
+    std::vector<std::uint8_t> blocked(n, 7), blocked_soa(n, 7);
+    bvh.intersect(rays.data(), n, hits.data(), filter);
+    bvh.intersect(rays.data(), n, limit.data(), bounded.data(), filter);
+    bvh.occluded(rays.data(), n, limit.data(), blocked.data(), filter);
+    std::vector<T> c[6];
+    for (const auto& r : rays)
+        for (int a = 0; a < 3; ++a)
+            c[a].push_back(isin::component(r.origin, a)), c[3 + a].push_back(isin::component(r.direction, a));
+    const isin::RaysSoA<T> soa{c[0].data(), c[1].data(), c[2].data(), c[3].data(), c[4].data(), c[5].data()};
+    bvh.intersect(soa, n, nullptr, hits_soa.data(), filter);
+    bvh.occluded(soa, n, limit.data(), blocked_soa.data(), filter);
+    int mismatches = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto one = bvh.intersect(rays[i], std::numeric_limits<T>::infinity(), filter);
+        const auto one_bounded = bvh.intersect(rays[i], limit[i], filter);
+        const std::uint8_t shadow = bvh.occluded(rays[i], limit[i], filter) ? 1 : 0;
+        const bool ok = same_hit(hits[i], one) && same_hit(hits_soa[i], one) && same_hit(bounded[i], one_bounded) &&
+                        blocked[i] == shadow && blocked_soa[i] == shadow;
+        mismatches += !ok;
+    }
+    return mismatches;
+}
+
+/// Camera rays from `eye` through a w × h grid, ordered in 4×4 tiles (the packets).
+template <class T>
+std::vector<isin::Ray<T>> tiled_camera_rays(isin::Vertex<T> eye, T half_width, int w, int h) {
+    std::vector<isin::Ray<T>> rays;
+    for (int ty = 0; ty < h; ty += 4)
+        for (int tx = 0; tx < w; tx += 4)
+            for (int y = ty; y < ty + 4 && y < h; ++y)
+                for (int x = tx; x < tx + 4 && x < w; ++x) {
+                    const T px = (T(x) + T(0.5)) / T(w) * 2 - 1, py = (T(y) + T(0.5)) / T(h) * 2 - 1;
+                    rays.push_back({eye, isin::normalize(isin::Vertex<T>{px * half_width, py * half_width, T(1)})});
+                }
+    return rays;
+}
+
+
+} // namespace
+
+TEST_CASE_TEMPLATE("Bvh stream: coherent camera tiles give the single-ray hits bit for bit", T, float, double) {
+    const auto tris = workloads::triangle_soup<T>(5000, 11, 1.5);
+    const isin::Bvh<T> bvh{tris};
+    for (const T half_width : {T(0.05), T(0.6), T(2)}) { // narrow to wide fields of view
+        CAPTURE(half_width);
+        const auto rays = tiled_camera_rays<T>({T(0.3), T(-0.2), T(-25)}, half_width, 64, 48);
+        std::vector<T> limit(rays.size());
+        for (std::size_t i = 0; i < rays.size(); ++i) limit[i] = T(15) + T(i % 23); // some blocked, some not
+        std::size_t hit = 0;
+        for (const auto& r : rays) hit += bool(bvh.intersect(r));
+        CHECK(hit > rays.size() / 20);
+        CHECK(stream_mismatches(bvh, rays, limit) == 0);
+        isin::HitFilter cull;
+        cull.cull_backfaces = true;
+        CHECK(stream_mismatches(bvh, rays, limit, cull) == 0);
+        std::vector<std::uint8_t> skip(tris.size());
+        for (std::size_t i = 0; i < skip.size(); i += 3) skip[i] = 1;
+        isin::HitFilter skipping;
+        skipping.skip = skip.data();
+        CHECK(stream_mismatches(bvh, rays, limit, skipping) == 0);
+    }
+}
+
+TEST_CASE_TEMPLATE("Bvh stream: random rays, shadow rays from hit points and counts that are not 16s", T, float,
+                   double) {
+    const auto tris = workloads::triangle_soup<T>(3000, 5, 1.5);
+    const isin::Bvh<T> bvh{tris};
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    std::vector<isin::Ray<T>> rays;
+    std::vector<T> limit;
+    for (int i = 0; i < 2000; ++i) {
+        const isin::Vertex<T> o{T(uni(rng) * 12), T(uni(rng) * 12), T(uni(rng) * 12)};
+        rays.push_back({o, isin::Vertex<T>{T(uni(rng)), T(uni(rng)), T(uni(rng))}});
+        limit.push_back(T(1 + 20 * (uni(rng) + 1)));
+    }
+    CHECK(stream_mismatches(bvh, rays, limit) == 0);
+    // Shadow rays from the hits of a camera tile towards one light: coherent, origins apart.
+    const auto camera = tiled_camera_rays<T>({0, 0, T(-25)}, T(0.5), 32, 32);
+    std::vector<isin::Ray<T>> shadows;
+    std::vector<T> one;
+    const isin::Vertex<T> light{T(5), T(30), T(-10)};
+    for (const auto& r : camera) {
+        const auto h = bvh.intersect(r);
+        const isin::Vertex<T> p = h ? r.at(h.t * T(0.999)) : r.at(T(20));
+        shadows.push_back({p, light - p});
+        one.push_back(T(1));
+    }
+    CHECK(stream_mismatches(bvh, shadows, one) == 0);
+    for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(2), std::size_t(15), std::size_t(17),
+                          std::size_t(33)}) {
+        CAPTURE(n);
+        const std::vector<isin::Ray<T>> some(camera.begin(), camera.begin() + std::ptrdiff_t(n));
+        const std::vector<T> some_limit(one.begin(), one.begin() + std::ptrdiff_t(n));
+        CHECK(stream_mismatches(bvh, some, some_limit) == 0);
+    }
+}
+
+TEST_CASE_TEMPLATE("Bvh stream: NaN, infinite, zero, axis-parallel and −0.0 rays inside packets", T, float, double) {
+    const auto tris = workloads::triangle_soup<T>(2000, 8, 1.5);
+    const isin::Bvh<T> bvh{tris};
+    const T nan = std::numeric_limits<T>::quiet_NaN(), inf = std::numeric_limits<T>::infinity();
+    auto rays = tiled_camera_rays<T>({0, 0, T(-25)}, T(0.4), 32, 16);
+    std::vector<T> limit(rays.size(), T(40));
+    // Spoil one ray of every other packet, a different way each time.
+    const isin::Ray<T> bad[] = {
+        {{nan, 0, 0}, {0, 0, 1}},          {{0, 0, T(-25)}, {0, 0, 0}},     {{0, 0, T(-25)}, {nan, 0, 1}},
+        {{inf, 0, T(-25)}, {0, 0, 1}},     {{0, 0, T(-25)}, {0, 0, 1}},     {{0, 0, T(-25)}, {T(-0.0), T(0.0), 1}},
+        {{T(1), T(2), T(-25)}, {0, 1, 0}}, {{0, 0, T(-25)}, {0, 0, T(-1)}}, {{0, 0, T(-25)}, {T(1e-30), 0, T(1)}},
+        {{T(3), T(1), T(40)}, {T(-0.1), T(0.05), T(-1)}}};
+    std::size_t k = 0;
+    for (std::size_t i = 5; i < rays.size(); i += 32, ++k) rays[i] = bad[k % std::size(bad)];
+    // Bad bounds: 0, negative, NaN, infinite.
+    limit[7] = 0, limit[40] = T(-1), limit[73] = nan, limit[100] = inf;
+    CHECK(stream_mismatches(bvh, rays, limit) == 0);
+    // Every ray of a packet axis-parallel, and every ray pointing the same way.
+    std::vector<isin::Ray<T>> parallel;
+    for (int i = 0; i < 64; ++i)
+        parallel.push_back({{T(-5 + (i % 8) * 1.3), T(-5 + (i / 8) * 1.3), T(-25)}, {T(-0.0), 0, T(1)}});
+    CHECK(stream_mismatches(bvh, parallel, std::vector<T>(parallel.size(), inf)) == 0);
+}
+
+TEST_CASE_TEMPLATE("Bvh stream: a closed mesh hit at its shared edges and vertices as by single rays (no leak)", T,
+                   float, double) {
+    for (const auto& m : {workloads::closed_sphere_edges<T>(3000), workloads::grid_edges<T>(3000)}) {
+        const isin::Bvh<T> bvh{m.mesh};
+        std::vector<isin::Hit<T>> hits(m.rays.size());
+        bvh.intersect(m.rays.data(), m.rays.size(), hits.data());
+        int leaks = 0, mismatches = 0;
+        for (std::size_t i = 0; i < m.rays.size(); ++i) {
+            leaks += !hits[i] ||
+                     std::fabs(double(hits[i].t) - workloads::mesh_ray_distance) > 1e-3 * workloads::mesh_ray_distance;
+            mismatches += !same_hit(hits[i], bvh.intersect(m.rays[i]));
+        }
+        CHECK(leaks == 0);
+        CHECK(mismatches == 0);
+    }
+}
+
+TEST_CASE_TEMPLATE("Bvh: of triangles hit at the same t the lowest index wins, single rays and packets alike", T,
+                   float, double) {
+    // 40 copies of one quad's triangles spread over the array: every hit is a tie.
+    std::vector<isin::Triangle<T>> tris;
+    std::mt19937_64 rng(1);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    const isin::Triangle<T> a{{-4, -4, 0}, {-4, 4, 0}, {4, -4, 0}}, b{{4, 4, 0}, {4, -4, 0}, {-4, 4, 0}};
+    std::vector<std::uint32_t> first_a, first_b;
+    for (int i = 0; i < 200; ++i) {
+        const int pick = int((uni(rng) + 1) * 3);
+        if (pick == 0) {
+            tris.push_back(a);
+        } else if (pick == 1) {
+            tris.push_back(b);
+        } else {
+            const isin::Vertex<T> c{T(uni(rng) * 20), T(uni(rng) * 20), T(5 + uni(rng))};
+            tris.push_back({c, c + isin::Vertex<T>{0, 1, 0}, c + isin::Vertex<T>{1, 0, 0}});
+        }
+    }
+    std::uint32_t lowest_a = 0, lowest_b = 0;
+    const auto same = [](const isin::Triangle<T>& x, const isin::Triangle<T>& y) {
+        return x.v0 == y.v0 && x.v1 == y.v1 && x.v2 == y.v2;
+    };
+    while (!same(tris[lowest_a], a)) ++lowest_a;
+    while (!same(tris[lowest_b], b)) ++lowest_b;
+    const isin::Bvh<T> bvh{tris};
+    const auto rays = tiled_camera_rays<T>({T(0.1), T(0.2), T(-10)}, T(0.3), 16, 16);
+    std::vector<isin::Hit<T>> hits(rays.size());
+    bvh.intersect(rays.data(), rays.size(), hits.data());
+    int wrong = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const auto one = bvh.intersect(rays[i]);
+        REQUIRE(one);
+        wrong += !same_hit(one, hits[i]);
+        wrong += one.primitive != lowest_a && one.primitive != lowest_b;
+    }
+    CHECK(wrong == 0);
+}
