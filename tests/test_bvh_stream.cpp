@@ -70,7 +70,6 @@ std::vector<isin::Ray<T>> tiled_camera_rays(isin::Vertex<T> eye, T half_width, i
     return rays;
 }
 
-
 } // namespace
 
 TEST_CASE_TEMPLATE("Bvh stream: coherent camera tiles give the single-ray hits bit for bit", T, float, double) {
@@ -122,8 +121,8 @@ TEST_CASE_TEMPLATE("Bvh stream: random rays, shadow rays from hit points and cou
         one.push_back(T(1));
     }
     CHECK(stream_mismatches(bvh, shadows, one) == 0);
-    for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(2), std::size_t(15), std::size_t(17),
-                          std::size_t(33)}) {
+    for (std::size_t n :
+         {std::size_t(0), std::size_t(1), std::size_t(2), std::size_t(15), std::size_t(17), std::size_t(33)}) {
         CAPTURE(n);
         const std::vector<isin::Ray<T>> some(camera.begin(), camera.begin() + std::ptrdiff_t(n));
         const std::vector<T> some_limit(one.begin(), one.begin() + std::ptrdiff_t(n));
@@ -138,11 +137,16 @@ TEST_CASE_TEMPLATE("Bvh stream: NaN, infinite, zero, axis-parallel and −0.0 ra
     auto rays = tiled_camera_rays<T>({0, 0, T(-25)}, T(0.4), 32, 16);
     std::vector<T> limit(rays.size(), T(40));
     // Spoil one ray of every other packet, a different way each time.
-    const isin::Ray<T> bad[] = {
-        {{nan, 0, 0}, {0, 0, 1}},          {{0, 0, T(-25)}, {0, 0, 0}},     {{0, 0, T(-25)}, {nan, 0, 1}},
-        {{inf, 0, T(-25)}, {0, 0, 1}},     {{0, 0, T(-25)}, {0, 0, 1}},     {{0, 0, T(-25)}, {T(-0.0), T(0.0), 1}},
-        {{T(1), T(2), T(-25)}, {0, 1, 0}}, {{0, 0, T(-25)}, {0, 0, T(-1)}}, {{0, 0, T(-25)}, {T(1e-30), 0, T(1)}},
-        {{T(3), T(1), T(40)}, {T(-0.1), T(0.05), T(-1)}}};
+    const isin::Ray<T> bad[] = {{{nan, 0, 0}, {0, 0, 1}},
+                                {{0, 0, T(-25)}, {0, 0, 0}},
+                                {{0, 0, T(-25)}, {nan, 0, 1}},
+                                {{inf, 0, T(-25)}, {0, 0, 1}},
+                                {{0, 0, T(-25)}, {0, 0, 1}},
+                                {{0, 0, T(-25)}, {T(-0.0), T(0.0), 1}},
+                                {{T(1), T(2), T(-25)}, {0, 1, 0}},
+                                {{0, 0, T(-25)}, {0, 0, T(-1)}},
+                                {{0, 0, T(-25)}, {T(1e-30), 0, T(1)}},
+                                {{T(3), T(1), T(40)}, {T(-0.1), T(0.05), T(-1)}}};
     std::size_t k = 0;
     for (std::size_t i = 5; i < rays.size(); i += 32, ++k) rays[i] = bad[k % std::size(bad)];
     // Bad bounds: 0, negative, NaN, infinite.
@@ -172,8 +176,8 @@ TEST_CASE_TEMPLATE("Bvh stream: a closed mesh hit at its shared edges and vertic
     }
 }
 
-TEST_CASE_TEMPLATE("Bvh: of triangles hit at the same t the lowest index wins, single rays and packets alike", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("Bvh: of triangles hit at the same t the lowest index wins, single rays and packets alike", T, float,
+                   double) {
     // 40 copies of one quad's triangles spread over the array: every hit is a tie.
     std::vector<isin::Triangle<T>> tris;
     std::mt19937_64 rng(1);

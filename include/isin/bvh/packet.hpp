@@ -5,8 +5,10 @@
 /// Whitted and distribution ray tracing"; Wald et al. 2007, "Ray tracing deformable scenes using
 /// dynamic bounding volume hierarchies"): one 8-lane test like a single ray's, shared by 16 rays.
 /// The interval test is conservative, so the packet visits every node any of its rays enters;
-/// at a leaf each ray then takes the single-ray slab test of the leaf's box (traverse.hpp's
-/// fast form, the same arithmetic lane by lane), and only the rays it lets in reach the leaf.
+/// each child it lets in then takes the rays' own slab tests (traverse.hpp's fast form, lane by
+/// lane on the rays), so that a child no ray enters is dropped (shadow rays from a patch of
+/// surface spread their origins, and the interval test alone let in twice the leaves) and the
+/// children are ordered by their rays' own entries.
 /// Packets need AVX + FMA and float (ISIN_DETAIL_PACKETS); callers fall back to single rays
 /// elsewhere, and for rays that are not coherent (make_packet says which).
 #include <cstddef>
@@ -73,7 +75,8 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
         __m256 ok = _mm256_cmp_ps(_mm256_load_ps(p.t_far + g), zero, _CMP_GT_OQ), d_max = zero;
         for (int a = 0; a < 3; ++a) {
             const __m256 o = _mm256_load_ps(c[a] + g), d = _mm256_load_ps(c[3 + a] + g);
-            const __m256 finite = _mm256_cmp_ps(_mm256_add_ps(_mm256_sub_ps(o, o), _mm256_sub_ps(d, d)), zero, _CMP_EQ_OQ);
+            const __m256 finite =
+                _mm256_cmp_ps(_mm256_add_ps(_mm256_sub_ps(o, o), _mm256_sub_ps(d, d)), zero, _CMP_EQ_OQ);
             ok = _mm256_and_ps(ok, finite);
             d_max = _mm256_max_ps(d_max, _mm256_and_ps(d, magnitude));
             octant[a] |= unsigned(_mm256_movemask_ps(d)) << g;
@@ -93,8 +96,8 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
     for (int g = 0; g < RayPacket::size; g += 8) {
         const __m256 dx = _mm256_load_ps(c[3] + g), dy = _mm256_load_ps(c[4] + g), dz = _mm256_load_ps(c[5] + g);
         const __m256 dd = _mm256_fmadd_ps(dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dx, dx)));
-        const __m256 d_d0 = _mm256_fmadd_ps(dz, _mm256_set1_ps(d0z),
-                                            _mm256_fmadd_ps(dy, _mm256_set1_ps(d0y), _mm256_mul_ps(dx, _mm256_set1_ps(d0x))));
+        const __m256 d_d0 = _mm256_fmadd_ps(
+            dz, _mm256_set1_ps(d0z), _mm256_fmadd_ps(dy, _mm256_set1_ps(d0y), _mm256_mul_ps(dx, _mm256_set1_ps(d0x))));
         const __m256 bound_cos = _mm256_mul_ps(_mm256_set1_ps(packet_cone_cos * len0), _mm256_sqrt_ps(dd));
         cone |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(d_d0, bound_cos, _CMP_GE_OQ))) << g;
     }
@@ -111,7 +114,8 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
         __m256 ok = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
         for (int a = 0; a < 3; ++a) {
             const __m256 o = _mm256_load_ps(c[a] + g), d = _mm256_load_ps(c[3 + a] + g);
-            const __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), d), inv_far = _mm256_mul_ps(inv, _mm256_set1_ps(widen));
+            const __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), d),
+                         inv_far = _mm256_mul_ps(inv, _mm256_set1_ps(widen));
             // max(bound, |o|)·|inv_far| below max/8 (false for an infinite inv)
             ok = _mm256_and_ps(
                 ok, _mm256_cmp_ps(_mm256_mul_ps(_mm256_max_ps(_mm256_and_ps(o, magnitude), _mm256_set1_ps(bound)),
@@ -131,20 +135,25 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
     if (!(lanes & (lanes - 1))) return 0;
     p.lanes = lanes;
     // Lanes outside the packet: never entered (t_far < 0), and out of the intervals.
-    const __m256 in[2] = {_mm256_castsi256_ps(_mm256_cmpgt_epi32(
-                              _mm256_and_si256(_mm256_set1_epi32(int(lanes)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
-                              _mm256_setzero_si256())),
-                          _mm256_castsi256_ps(_mm256_cmpgt_epi32(
-                              _mm256_and_si256(_mm256_set1_epi32(int(lanes >> 8)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
-                              _mm256_setzero_si256()))};
-    const __m256 pos_inf = _mm256_set1_ps(std::numeric_limits<float>::infinity()), neg_inf = _mm256_set1_ps(-std::numeric_limits<float>::infinity());
+    const __m256 in[2] = {
+        _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+            _mm256_and_si256(_mm256_set1_epi32(int(lanes)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+            _mm256_setzero_si256())),
+        _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+            _mm256_and_si256(_mm256_set1_epi32(int(lanes >> 8)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+            _mm256_setzero_si256()))};
+    const __m256 pos_inf = _mm256_set1_ps(std::numeric_limits<float>::infinity()),
+                 neg_inf = _mm256_set1_ps(-std::numeric_limits<float>::infinity());
     for (int g = 0; g < 2; ++g)
-        _mm256_store_ps(p.t_far + 8 * g, _mm256_blendv_ps(_mm256_set1_ps(-1.0f), _mm256_load_ps(p.t_far + 8 * g), in[g]));
+        _mm256_store_ps(p.t_far + 8 * g,
+                        _mm256_blendv_ps(_mm256_set1_ps(-1.0f), _mm256_load_ps(p.t_far + 8 * g), in[g]));
     const auto lo = [&](const float* v) {
-        return lanes_min(_mm256_blendv_ps(pos_inf, _mm256_load_ps(v), in[0]), _mm256_blendv_ps(pos_inf, _mm256_load_ps(v + 8), in[1]));
+        return lanes_min(_mm256_blendv_ps(pos_inf, _mm256_load_ps(v), in[0]),
+                         _mm256_blendv_ps(pos_inf, _mm256_load_ps(v + 8), in[1]));
     };
     const auto hi = [&](const float* v) {
-        return lanes_max(_mm256_blendv_ps(neg_inf, _mm256_load_ps(v), in[0]), _mm256_blendv_ps(neg_inf, _mm256_load_ps(v + 8), in[1]));
+        return lanes_max(_mm256_blendv_ps(neg_inf, _mm256_load_ps(v), in[0]),
+                         _mm256_blendv_ps(neg_inf, _mm256_load_ps(v + 8), in[1]));
     };
     using Node = BvhTree<float>::Node;
     for (int a = 0; a < 3; ++a) {
@@ -177,7 +186,8 @@ inline unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPack
     __m256 tn = _mm256_setzero_ps(), tf = _mm256_set1_ps(t_far);
     for (int a = 0; a < 3; ++a) {
         const __m256 margin = _mm256_set1_ps(p.margin[a]);
-        const __m256 dn = _mm256_sub_ps(_mm256_load_ps(plane<float>(n, p.near_plane[a])), _mm256_set1_ps(p.entry_org[a]));
+        const __m256 dn =
+            _mm256_sub_ps(_mm256_load_ps(plane<float>(n, p.near_plane[a])), _mm256_set1_ps(p.entry_org[a]));
         const __m256 df = _mm256_sub_ps(_mm256_load_ps(plane<float>(n, p.far_plane[a])), _mm256_set1_ps(p.exit_org[a]));
         const __m256 entry = _mm256_min_ps(_mm256_mul_ps(dn, _mm256_set1_ps(p.inv_lo[a])),
                                            _mm256_mul_ps(dn, _mm256_set1_ps(p.inv_hi[a])));
@@ -191,7 +201,7 @@ inline unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPack
 }
 
 /// Which rays of the packet enter child `k` of `n` before their own t_far: hit_children's fast
-/// form, lane by lane, on the rays instead of the children.
+/// form, lane by lane, on the rays instead of the children (the rays' test of a leaf's box).
 inline unsigned packet_rays_entering(const BvhTree<float>::Node& n, int k, const RayPacket& p) noexcept {
     unsigned rays = 0;
     for (int g = 0; g < RayPacket::size; g += 8) {
@@ -209,6 +219,34 @@ inline unsigned packet_rays_entering(const BvhTree<float>::Node& n, int k, const
     return rays;
 }
 
+/// As packet_rays_entering, and `t_min` gets the least entry distance of those rays (+∞ for none).
+inline unsigned packet_rays_entering(const BvhTree<float>::Node& n, int k, const RayPacket& p, float& t_min) noexcept {
+    unsigned rays = 0;
+    __m256 least = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    __m256 near_plane[3], far_plane[3];
+    for (int a = 0; a < 3; ++a) {
+        near_plane[a] = _mm256_set1_ps(plane<float>(n, p.near_plane[a])[k]);
+        far_plane[a] = _mm256_set1_ps(plane<float>(n, p.far_plane[a])[k]);
+    }
+    for (int g = 0; g < RayPacket::size; g += 8) {
+        __m256 t0[3], t1[3];
+        for (int a = 0; a < 3; ++a) {
+            t0[a] = _mm256_fmsub_ps(near_plane[a], _mm256_load_ps(p.inv[a] + g), _mm256_load_ps(p.org_inv_near[a] + g));
+            t1[a] =
+                _mm256_fmsub_ps(far_plane[a], _mm256_load_ps(p.inv_far[a] + g), _mm256_load_ps(p.org_inv_far[a] + g));
+        }
+        const __m256 tn = _mm256_max_ps(_mm256_max_ps(t0[0], t0[1]), _mm256_max_ps(t0[2], _mm256_setzero_ps()));
+        const __m256 tf = _mm256_min_ps(_mm256_min_ps(t1[0], t1[1]), _mm256_min_ps(t1[2], _mm256_load_ps(p.t_far + g)));
+        const __m256 in = _mm256_cmp_ps(tn, tf, _CMP_LE_OQ);
+        least = _mm256_min_ps(least, _mm256_blendv_ps(_mm256_set1_ps(std::numeric_limits<float>::infinity()), tn, in));
+        rays |= unsigned(_mm256_movemask_ps(in)) << g;
+    }
+    __m128 h = _mm_min_ps(_mm256_castps256_ps128(least), _mm256_extractf128_ps(least, 1));
+    h = _mm_min_ps(h, _mm_movehl_ps(h, h));
+    t_min = _mm_cvtss_f32(_mm_min_ss(h, _mm_shuffle_ps(h, h, 1)));
+    return rays;
+}
+
 // The largest t_far of the rays still traced.
 inline float packet_t_far(const RayPacket& p) noexcept {
     const __m256 m = _mm256_max_ps(_mm256_load_ps(p.t_far), _mm256_load_ps(p.t_far + 8));
@@ -218,31 +256,36 @@ inline float packet_t_far(const RayPacket& p) noexcept {
     return _mm_cvtss_f32(h);
 }
 
-/// Traces the packet through `tree`, nearest-first by the packet's entry bounds (Visit::nearest)
-/// or in any order (Visit::any). At each leaf whose box some of its rays enter, calls
-/// `leaf(leaf_index, rays, p.t_far)` with the mask of those rays; the leaf lowers their t_far
-/// (nearest) and returns the rays it is done with (any: they leave the packet). Stops when the
-/// stack is empty or no ray is left.
+/// Traces the packet through `tree`, nearest-first by the least entry of its rays
+/// (Visit::nearest) or in any order (Visit::any). At a node, the interval test picks the
+/// children some ray of the packet may enter, and each ray's own slab test keeps those that one
+/// does (with the rays that do, and the least of their entries). At each leaf some of its rays
+/// enter, calls `leaf(leaf_index, rays, p.t_far)` with the mask of those rays; the leaf lowers
+/// their t_far (nearest) and returns the rays it is done with (any: they leave the packet).
+/// Stops when the stack is empty or no ray is left.
 template <Visit visit, class Leaf>
 void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
     using Node = BvhTree<float>::Node;
     constexpr std::uint32_t leaf_bit = BvhTree<float>::leaf_bit;
     struct Entry {
         std::uint32_t ref;
-        float t;
-        std::uint32_t parent, slot; // where the entry's box is: child `slot` of node `parent`
+        float t;                    // the least entry distance of its rays
+        unsigned rays;              // the rays that enter it (when it was pushed)
+        std::uint32_t parent, slot; // where its box is: child `slot` of node `parent`
     };
     Entry stack[7 * BvhTree<float>::depth_limit + 1];
     int top = 0;
-    std::uint32_t ref = 0, parent = 0, slot = 0;
+    Entry e{0, 0.0f, p.lanes, 0, 0}; // the root node
     const Node* const nodes = tree.nodes().data();
     float t_packet = packet_t_far(p);
     if (!(t_packet > 0.0f)) return;
     for (;;) {
-        if (ref & leaf_bit) {
-            const unsigned rays = packet_rays_entering(nodes[parent], int(slot), p) & p.lanes;
+        if (e.ref & leaf_bit) {
+            // Nearest: t_far fell since the entry was pushed, so the rays are tested again.
+            const unsigned rays = visit == Visit::any ? e.rays & p.lanes
+                                                      : packet_rays_entering(nodes[e.parent], int(e.slot), p) & p.lanes;
             if (rays) {
-                const unsigned done = leaf(ref & ~leaf_bit, rays, p.t_far);
+                const unsigned done = leaf(e.ref & ~leaf_bit, rays, p.t_far);
                 if (done) {
                     p.lanes &= ~done;
                     for (unsigned d = done; d; d &= d - 1) p.t_far[lowest_bit(d)] = -1.0f;
@@ -251,22 +294,29 @@ void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
                 t_packet = packet_t_far(p);
             }
         } else {
-            const Node& n = nodes[ref];
+            const Node& n = nodes[e.ref];
             float t_near[8];
+            unsigned rays[8];
             unsigned mask = packet_hit_children(n, p, t_packet, t_near);
+            for (unsigned m = mask; m; m &= m - 1) { // each ray's own test: the children one enters
+                const int k = lowest_bit(m);
+                rays[k] = packet_rays_entering(n, k, p, t_near[k]) & p.lanes;
+                if (!rays[k]) mask &= ~(1u << k);
+            }
             if (mask) {
                 int k = lowest_bit(mask);
                 mask &= mask - 1;
+                const std::uint32_t parent = e.ref;
                 if (!mask) { // one child: go on with it
-                    parent = ref, slot = std::uint32_t(k), ref = n.child[k];
+                    e = {n.child[k], t_near[k], rays[k], parent, std::uint32_t(k)};
                     continue;
                 }
                 const int first = top;
-                stack[top++] = {n.child[k], t_near[k], ref, std::uint32_t(k)};
+                stack[top++] = {n.child[k], t_near[k], rays[k], parent, std::uint32_t(k)};
                 while (mask) {
                     k = lowest_bit(mask);
                     mask &= mask - 1;
-                    stack[top++] = {n.child[k], t_near[k], ref, std::uint32_t(k)};
+                    stack[top++] = {n.child[k], t_near[k], rays[k], parent, std::uint32_t(k)};
                 }
                 if constexpr (visit == Visit::nearest)
                     for (int i = first + 1; i < top; ++i) { // insertion sort, descending t
@@ -275,18 +325,14 @@ void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
                         while (j > first && stack[j - 1].t < c.t) stack[j] = stack[j - 1], --j;
                         stack[j] = c;
                     }
-                const Entry& e = stack[--top];
-                ref = e.ref, parent = e.parent, slot = e.slot;
+                e = stack[--top];
                 continue;
             }
         }
         for (;;) { // the next entry some ray may still reach
             if (top == 0) return;
-            const Entry& e = stack[--top];
-            if (e.t < t_packet) {
-                ref = e.ref, parent = e.parent, slot = e.slot;
-                break;
-            }
+            e = stack[--top];
+            if (e.t < t_packet && (e.rays & p.lanes)) break;
         }
     }
 }
