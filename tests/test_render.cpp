@@ -488,3 +488,64 @@ TEST_CASE("RenderStats: rays() adds the four kinds in 64 bits; mrays_per_second 
     CHECK(measured.rays() > 32u * 18u);
     CHECK(measured.mrays_per_second() == doctest::Approx(double(measured.rays()) / measured.seconds / 1e6));
 }
+
+namespace {
+/// Whether every pixel of render(scene, cam, opt) is the trace() of its camera rays, as the
+/// renderer computed pixels before its tiles: the packets change no pixel.
+template <class S>
+bool render_is_trace_per_pixel(const S& scene, const isin::Camera<typename S::value_type>& cam,
+                               const isin::RenderOptions& opt) {
+    using T = typename S::value_type;
+    const isin::Image image = isin::render(scene, cam, opt);
+    const auto masks = isin::backface_masks(scene, cam, opt.culling);
+    const auto* skip = opt.culling == isin::Culling::none ? nullptr : &masks;
+    isin::RenderStats stats;
+    const int N = opt.samples;
+    for (int y = 0; y < cam.height(); ++y)
+        for (int x = 0; x < cam.width(); ++x) {
+            isin::Color<T> sum{T(0), T(0), T(0)};
+            for (int sy = 0; sy < N; ++sy)
+                for (int sx = 0; sx < N; ++sx) {
+                    const T px = T(x) + (T(sx) + T(0.5)) / T(N) - T(0.5);
+                    const T py = T(y) + (T(sy) + T(0.5)) / T(N) - T(0.5);
+                    sum += isin::trace(scene, cam.primary_ray(px, py), 0, opt, stats, skip);
+                }
+            const isin::Rgb8 p = isin::to_rgb8(sum / T(N * N), opt.encoding), q = image(x, y);
+            if (p.r != q.r || p.g != q.g || p.b != q.b) return false;
+        }
+    return true;
+}
+} // namespace
+
+TEST_CASE_TEMPLATE("render: tiles of 4×4 pixels through the stream calls give each pixel trace()'s colour", T, float,
+                   double) {
+    isin::RenderOptions opt;
+    opt.progress = false;
+    opt.threads = 2;
+    // The note's scene (glass: shadow rays one by one) at a size that leaves partial tiles.
+    const auto note = note_scene::make<T>();
+    const isin::Camera<T> small{101, 58};
+    CHECK(render_is_trace_per_pixel(note, small, opt));
+    opt.samples = 2, opt.culling = isin::Culling::projected;
+    CHECK(render_is_trace_per_pixel(note, small, opt));
+    // An opaque scene with a placed mesh and a Bvh kind: packets for primary and shadow rays.
+    isin::Scene<T, isin::Sphere, isin::Triangle> opaque;
+    isin::Material<T> matte;
+    matte.color = {T(0.8), T(0.7), T(0.6)};
+    const auto m = opaque.add_material(matte);
+    opaque.add_mesh(isin::Mesh<T>::from_triangles(workloads::icosphere<T>({0, 0, 60}, 14.0, 3)), m);
+    for (const auto& tri : workloads::icosphere<T>({-20, 8, 50}, 6.0, 2)) opaque.add(tri, m);
+    opaque.add(isin::Sphere<T>{{18, -6, 45}, 5}, m);
+    opaque.add(isin::Triangle<T>{{-200, -20, 0}, {-200, -20, 400}, {200, -20, 0}}, m); // the floor
+    opaque.add(isin::Triangle<T>{{200, -20, 400}, {200, -20, 0}, {-200, -20, 400}}, m);
+    opaque.add_light({{-40, 60, 10}});
+    opaque.add_light({{50, 20, -20}, {T(0.4), T(0.4), T(0.4)}});
+    opaque.commit();
+    const isin::Camera<T> cam{96, 54};
+    opt.samples = 1, opt.culling = isin::Culling::none;
+    CHECK(render_is_trace_per_pixel(opaque, cam, opt));
+    opt.culling = isin::Culling::dot_product;
+    CHECK(render_is_trace_per_pixel(opaque, cam, opt));
+    opt.shadows = false;
+    CHECK(render_is_trace_per_pixel(opaque, cam, opt));
+}

@@ -8,7 +8,10 @@
 #include "common/workloads.hpp"
 
 #include <array>
+#include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -295,4 +298,85 @@ TEST_CASE_TEMPLATE("§10 texture_coordinates: (u, v) on a rectangle's first tria
     CHECK_FALSE(isin::texture_coordinates(tri, hit, st));
     CHECK_FALSE(isin::texture_coordinates(isin::Sphere<T>{{0, 0, 10}, 1}, hit, st));
     CHECK(st == std::array<T, 2>{T(-1), T(-1)}); // untouched
+}
+
+namespace {
+template <class T>
+bool same_scene_hit(const isin::Hit<T>& a, const isin::Hit<T>& b) {
+    return std::memcmp(&a.t, &b.t, sizeof a.t) == 0 && std::memcmp(&a.u, &b.u, sizeof a.u) == 0 &&
+           std::memcmp(&a.v, &b.v, sizeof a.v) == 0 && a.primitive == b.primitive && a.geometry == b.geometry;
+}
+
+/// Rays of view_rays in 4×4 tiles, with some bad ones mixed in.
+template <class T>
+std::vector<isin::Ray<T>> tiled_view_rays(int w, int h) {
+    const auto rays = view_rays<T>(w, h);
+    std::vector<isin::Ray<T>> tiled;
+    for (int ty = 0; ty < h; ty += 4)
+        for (int tx = 0; tx < w; tx += 4)
+            for (int y = ty; y < std::min(ty + 4, h); ++y)
+                for (int x = tx; x < std::min(tx + 4, w); ++x) tiled.push_back(rays[std::size_t(y * w + x)]);
+    const T nan = std::numeric_limits<T>::quiet_NaN();
+    for (std::size_t i = 3; i < tiled.size(); i += 41)
+        tiled[i].direction = i % 2 ? isin::Vertex<T>{} : isin::Vertex<T>{nan, 0, 1};
+    return tiled;
+}
+
+/// Counts the rays whose stream results differ from the single-ray calls'.
+template <class S>
+int scene_stream_mismatches(const S& scene, const std::vector<isin::Ray<typename S::value_type>>& rays,
+                            const typename S::Culled* culled = nullptr) {
+    using T = typename S::value_type;
+    std::vector<isin::Hit<T>> hits(rays.size());
+    std::vector<T> limit(rays.size());
+    std::vector<std::uint8_t> blocked(rays.size(), 9);
+    for (std::size_t i = 0; i < rays.size(); ++i) limit[i] = T(20) + T(i % 37) * T(3);
+    scene.intersect(rays.data(), rays.size(), hits.data(), culled);
+    scene.occluded(rays.data(), rays.size(), limit.data(), blocked.data());
+    int mismatches = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const auto one = scene.intersect(rays[i], std::numeric_limits<T>::infinity(), culled);
+        mismatches += !same_scene_hit(hits[i], one);
+        const bool shadow = scene.occluded(rays[i], limit[i]);
+        mismatches += blocked[i] != (shadow ? 1 : 0);
+        // occluded is "anything in the way": what transmittance sees through nothing transparent
+        mismatches += shadow != (scene.transmittance(rays[i], limit[i]) < T(1));
+    }
+    return mismatches;
+}
+} // namespace
+
+TEST_CASE_TEMPLATE("scene stream: every kind, a Bvh kind, one placed mesh or several, culled or not: the single-ray "
+                   "hits bit for bit",
+                   T, float, double) {
+    using X = isin::Transform<T>;
+    const auto ball = workloads::icosphere<T>({0, 4, 50}, 8.0, 3); // 1280 triangles: a Bvh
+    const auto rays = tiled_view_rays<T>(96, 56);
+    for (int placements : {0, 1, 3}) {
+        CAPTURE(placements);
+        isin::Scene<T, isin::Sphere, isin::Triangle, isin::TexturedTriangle> scene;
+        const auto m = scene.add_material({});
+        scene.add(isin::Sphere<T>{{-6, 2, 45}, 3}, m);
+        scene.add(isin::Sphere<T>{{5, -3, 50}, T(2.5)}, m);
+        for (const auto& tri : workloads::icosphere<T>({4, 3, 42}, 2.0, 2))
+            scene.add(tri, m); // 320 triangles of the Triangle kind: its own Bvh
+        scene.add_textured_rectangle({-30, -12, 20}, {-30, -12, 90}, {30, -12, 20}, m);
+        if (placements > 0) {
+            const auto id = scene.add_mesh(isin::Mesh<T>::from_triangles(ball), m);
+            for (int k = 1; k < placements; ++k) scene.add_instance(id, X::translation({T(18 * k - 27), 0, 10}));
+        }
+        scene.commit();
+        CHECK(scene.template has_bvh<isin::Triangle<T>>());
+        std::size_t hit = 0, ball_hits = 0;
+        for (const auto& ray : rays) {
+            const auto h = scene.intersect(ray);
+            hit += bool(h), ball_hits += h && h.geometry >= 3;
+        }
+        CHECK(hit > rays.size() / 4);
+        CHECK((ball_hits > 50) == (placements > 0));
+        CHECK(scene_stream_mismatches(scene, rays) == 0);
+        const isin::Camera<T> cam{96, 56};
+        const auto culled = isin::backface_masks(scene, cam, isin::Culling::dot_product);
+        CHECK(scene_stream_mismatches(scene, rays, &culled) == 0);
+    }
 }

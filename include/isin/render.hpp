@@ -1,7 +1,7 @@
 #pragma once
 /// isin — a Whitted-style renderer (note §3, §7–§11): primary rays per pixel, Phong shading with
 /// shadow rays, recursive reflection and transmission, optional supersampling and backface
-/// culling, multi-threaded over rows.
+/// culling, multi-threaded over bands of rows traced in 4×4-pixel tiles (packets of rays).
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -94,6 +94,67 @@ namespace detail {
 }
 } // namespace detail
 
+namespace detail {
+// What shading a hit needs between its shadow rays (trace, and the renderer's tiles): the
+// surface, its material and colour, the normals on the ray's side, where secondary rays start,
+// and the colour gathered so far.
+template <class T>
+struct Shading {
+    SurfacePoint<T> sp;
+    const Material<T>* m;
+    Color<T> object, local;
+    Vertex<T> Nf, Ns, V, above, shadow_from;
+    T scale;
+    bool entering;
+};
+
+// The hit's surface, material and ambient term (§7), and where its secondary rays start.
+template <class T, template <class> class... S>
+Shading<T> begin_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Hit<T>& sh) {
+    Shading<T> s;
+    s.sp = scene.surface(ray, sh);
+    const SurfacePoint<T>& sp = s.sp;
+    s.m = &scene.material(sp.material);
+    const Material<T>& m = *s.m;
+    s.object = sp.tint * (m.texture >= 0 && sp.has_texture_coordinates
+                              ? sample(scene.texture(m.texture), sp.st[0], sp.st[1],
+                                       m.texture_filter.value_or(scene.texture_filter))
+                              : m.color);
+    const Vertex<T>& d = ray.direction;
+    s.entering = dot(sp.normal, d) < T(0);
+    s.Nf = s.entering ? sp.normal : -sp.normal; // the normal on the ray's side
+    // The shading normal on the same side (equal to Nf on flat surfaces); lights the point (§7).
+    s.Ns = dot(sp.shading_normal, s.Nf) < T(0) ? -sp.shading_normal : sp.shading_normal;
+    s.V = -d;                                                          // §7: towards the eye
+    s.local = m.ka * m.ambient_color * s.object * scene.ambient_light; // §7: ambient
+    s.scale = max_abs(ray.origin);                                     // the hit point's rounding grows with it
+    s.above = offset_origin(sp.point, s.Nf, s.scale);
+    // Shadow rays leave from the shading point (= the hit point on flat surfaces), off the surface.
+    s.shadow_from = sp.shading_point == sp.point ? s.above : offset_origin(sp.shading_point, s.Nf, s.scale);
+    return s;
+}
+
+// Whether `light` can light the shaded point (§7: not when the surface faces away); if so its
+// direction L and the shadow ray towards it (§9: anything with t in (0, 1) is in the way).
+template <class T>
+bool lit_by(const Shading<T>& s, const PointLight<T>& light, Vertex<T>& L, Ray<T>& shadow) noexcept {
+    L = normalize(light.position - s.sp.point);
+    if (!(dot(s.Ns, L) > T(0))) return false;
+    shadow = {s.shadow_from, light.position - s.shadow_from};
+    return true;
+}
+
+// The light's Phong term (§7) weighed by what gets through to it.
+template <class T>
+void add_light(Shading<T>& s, const PointLight<T>& light, const Vertex<T>& L, T visible) noexcept {
+    if (visible > T(0)) s.local += visible * phong_light(*s.m, s.object, s.Ns, L, s.V, light.color);
+}
+
+template <class T, template <class> class... S>
+Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shading<T>& s, int depth,
+                     const RenderOptions& opt, RenderStats& stats);
+} // namespace detail
+
 /// The colour seen along `ray` (unit direction): nearest hit (§5), Phong with shadows (§7, §9),
 /// reflection and transmission (§8) up to `max_depth`. `skip` culls objects (primary rays only).
 template <class T, template <class> class... S>
@@ -103,60 +164,96 @@ template <class T, template <class> class... S>
         detail::throw_too_deep(depth); // render() checks opt.max_depth; this bounds direct calls too
     const Hit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
     if (!sh) return scene.background;
-    const SurfacePoint<T> sp = scene.surface(ray, sh);
-    const Material<T>& m = scene.material(sp.material);
-    const Color<T> object = sp.tint * (m.texture >= 0 && sp.has_texture_coordinates
-                                           ? sample(scene.texture(m.texture), sp.st[0], sp.st[1],
-                                                    m.texture_filter.value_or(scene.texture_filter))
-                                           : m.color);
-    const Vertex<T>& d = ray.direction;
-    const bool entering = dot(sp.normal, d) < T(0);
-    const Vertex<T> Nf = entering ? sp.normal : -sp.normal; // the normal on the ray's side
-    // The shading normal on the same side (equal to Nf on flat surfaces); lights the point (§7).
-    const Vertex<T> Ns = dot(sp.shading_normal, Nf) < T(0) ? -sp.shading_normal : sp.shading_normal;
-    const Vertex<T> V = -d; // §7: towards the eye
-
-    Color<T> local = m.ka * m.ambient_color * object * scene.ambient_light; // §7: ambient
-    const T scale = max_abs(ray.origin);                                    // the hit point's rounding grows with it
-    const Vertex<T> above = offset_origin(sp.point, Nf, scale);
-    // Shadow rays leave from the shading point (= the hit point on flat surfaces), off the surface.
-    const Vertex<T> shadow_from = sp.shading_point == sp.point ? above : offset_origin(sp.shading_point, Nf, scale);
+    detail::Shading<T> s = detail::begin_shading(scene, ray, sh);
     for (const PointLight<T>& light : scene.lights) {
-        const Vertex<T> to_light = light.position - sp.point;
-        const Vertex<T> L = normalize(to_light);
-        if (!(dot(Ns, L) > T(0))) continue; // §7: facing away → unlit, no shadow ray needed
+        Vertex<T> L;
+        Ray<T> shadow;
+        if (!detail::lit_by(s, light, L, shadow)) continue; // §7: facing away → unlit, no shadow ray needed
         T visible = T(1);
         if (opt.shadows) { // §9: a ray towards the light; anything nearer than the light shadows
             ++stats.shadow;
-            visible = scene.transmittance(Ray<T>{shadow_from, light.position - shadow_from}, T(1));
+            visible = scene.transmittance(shadow, T(1));
         }
-        if (visible > T(0)) local += visible * phong_light(m, object, Ns, L, V, light.color);
+        detail::add_light(s, light, L, visible);
     }
-    if (depth >= opt.max_depth || (m.reflectivity <= T(0) && m.transparency <= T(0))) return local;
+    return detail::end_shading(scene, ray, s, depth, opt, stats);
+}
 
-    Color<T> result = std::max(T(0), T(1) - m.reflectivity - m.transparency) * local;
+namespace detail {
+// The shaded point's colour: its local colour, and the reflected and transmitted rays (§8).
+template <class T, template <class> class... S>
+Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shading<T>& s, int depth,
+                     const RenderOptions& opt, RenderStats& stats) {
+    const Material<T>& m = *s.m;
+    if (depth >= opt.max_depth || (m.reflectivity <= T(0) && m.transparency <= T(0))) return s.local;
+    const Vertex<T>& d = ray.direction;
+    Color<T> result = std::max(T(0), T(1) - m.reflectivity - m.transparency) * s.local;
     if (m.reflectivity > T(0)) { // §8: Rd − 2(Rd·N)N from the hit point
         ++stats.reflection;
-        Vertex<T> mirrored = reflect(d, Ns);
-        if (!(dot(mirrored, Nf) > T(0))) mirrored = reflect(d, Nf); // a shading normal must not send it inside
-        result += m.reflectivity * trace(scene, Ray<T>{above, mirrored}, depth + 1, opt, stats);
+        Vertex<T> mirrored = reflect(d, s.Ns);
+        if (!(dot(mirrored, s.Nf) > T(0))) mirrored = reflect(d, s.Nf); // a shading normal must not send it inside
+        result += m.reflectivity * trace(scene, Ray<T>{s.above, mirrored}, depth + 1, opt, stats);
     }
     if (m.transparency > T(0)) { // §8: straight through (ior = 1) or bent by Snell's law
         Vertex<T> dir = d;
         bool reflected = false;
         if (m.ior != T(1)) {
-            const T eta = entering ? T(1) / m.ior : m.ior; // n1/n2
-            if (const auto r = refract(d, Nf, eta))
+            const T eta = s.entering ? T(1) / m.ior : m.ior; // n1/n2
+            if (const auto r = refract(d, s.Nf, eta))
                 dir = normalize(*r);
             else
-                dir = reflect(d, Nf), reflected = true; // total internal reflection
+                dir = reflect(d, s.Nf), reflected = true; // total internal reflection
         }
         ++stats.refraction;
-        const Vertex<T> origin = reflected ? above : offset_origin(sp.point, -Nf, scale);
+        const Vertex<T> origin = reflected ? s.above : offset_origin(s.sp.point, -s.Nf, s.scale);
         result += m.transparency * trace(scene, Ray<T>{origin, dir}, depth + 1, opt, stats);
     }
     return result;
 }
+
+// One 4×4 tile of pixels (fewer at the image's edges), one sample position of each: the primary
+// rays through the scene's stream intersect (packets), their shadow rays light by light through
+// the stream occluded when nothing in the scene is transparent (then transmittance is 0 or 1),
+// else one by one; each pixel's colour is added to sum[] exactly as trace() computes it.
+template <class T, template <class> class... S>
+void trace_tile(const Scene<T, S...>& scene, const Ray<T> (&rays)[16], int n, bool opaque, const RenderOptions& opt,
+                RenderStats& stats, const typename Scene<T, S...>::Culled* skip, Color<T> (&sum)[16]) {
+    Hit<T> hits[16];
+    scene.intersect(rays, std::size_t(n), hits, skip);
+    Shading<T> s[16];
+    int shaded[16], count = 0;
+    for (int k = 0; k < n; ++k) {
+        if (!hits[k]) {
+            sum[k] += scene.background;
+            continue;
+        }
+        s[k] = begin_shading(scene, rays[k], hits[k]);
+        shaded[count++] = k;
+    }
+    for (const PointLight<T>& light : scene.lights) {
+        Vertex<T> L[16];
+        Ray<T> shadow[16];
+        int lit[16], m = 0;
+        for (int i = 0; i < count; ++i)
+            if (lit_by(s[shaded[i]], light, L[m], shadow[m])) lit[m++] = shaded[i];
+        if (!opt.shadows) {
+            for (int i = 0; i < m; ++i) add_light(s[lit[i]], light, L[i], T(1));
+            continue;
+        }
+        stats.shadow += std::uint64_t(m);
+        if (opaque) {
+            const T one[16] = {T(1), T(1), T(1), T(1), T(1), T(1), T(1), T(1),
+                               T(1), T(1), T(1), T(1), T(1), T(1), T(1), T(1)};
+            std::uint8_t blocked[16];
+            scene.occluded(shadow, std::size_t(m), one, blocked);
+            for (int i = 0; i < m; ++i) add_light(s[lit[i]], light, L[i], blocked[i] ? T(0) : T(1));
+        } else {
+            for (int i = 0; i < m; ++i) add_light(s[lit[i]], light, L[i], scene.transmittance(shadow[i], T(1)));
+        }
+    }
+    for (int i = 0; i < count; ++i) sum[shaded[i]] += end_shading(scene, rays[shaded[i]], s[shaded[i]], 0, opt, stats);
+}
+} // namespace detail
 
 /// A band of image rows: [first, first + rows).
 struct RowBand {
@@ -202,8 +299,13 @@ template <class T, template <class> class... S>
     const auto masks = backface_masks(scene, camera, opt.culling);
     const auto* skip = opt.culling == Culling::none ? nullptr : &masks;
 
-    const int threads = std::min(detail::thread_count(opt.threads), rows);
-    std::atomic<int> next_row{0}, rows_done{0};
+    // Bands of 4 rows, traced in tiles of 4×4 pixels: 16 primary rays at a time, and their shadow
+    // rays, through the scene's stream calls (packets).
+    const int bands = (rows + 3) / 4;
+    const int threads = std::min(detail::thread_count(opt.threads), bands);
+    std::atomic<int> next_band{0}, rows_done{0};
+    bool opaque = true; // nothing transparent: a shadow ray's transmittance is 0 or 1
+    for (const Material<T>& m : scene.materials) opaque = opaque && m.transparency == T(0);
     std::vector<RenderStats> per_worker(static_cast<std::size_t>(threads)); // summed after the join: no lock
 #ifdef ISIN_HAVE_ISATTY
     const bool show_progress = opt.progress && isatty(STDERR_FILENO);
@@ -216,20 +318,28 @@ template <class T, template <class> class... S>
         const bool reporter = worker == 0;
         RenderStats local; // on the worker's own stack: no false sharing while counting
         auto last_report = start;
-        for (int row; !error.failed() && (row = next_row.fetch_add(1)) < rows;) {
-            const int y = first_row + row;
-            for (int x = 0; x < W; ++x) {
-                Color<T> sum{T(0), T(0), T(0)};
+        for (int band; !error.failed() && (band = next_band.fetch_add(1)) < bands;) {
+            const int row0 = 4 * band, band_rows = std::min(4, rows - row0);
+            for (int x0 = 0; x0 < W; x0 += 4) {
+                const int tile_w = std::min(4, W - x0), n = tile_w * band_rows;
+                Color<T> sum[16];
+                for (Color<T>& c : sum) c = {T(0), T(0), T(0)};
                 for (int sy = 0; sy < N; ++sy)
                     for (int sx = 0; sx < N; ++sx) {
-                        const T px = T(x) + (T(sx) + T(0.5)) / T(N) - T(0.5);
-                        const T py = T(y) + (T(sy) + T(0.5)) / T(N) - T(0.5);
-                        ++local.primary;
-                        sum += trace(scene, camera.primary_ray(px, py), 0, opt, local, skip); // §3
+                        Ray<T> rays[16];
+                        for (int k = 0; k < n; ++k) {
+                            const int x = x0 + k % tile_w, y = first_row + row0 + k / tile_w;
+                            const T px = T(x) + (T(sx) + T(0.5)) / T(N) - T(0.5);
+                            const T py = T(y) + (T(sy) + T(0.5)) / T(N) - T(0.5);
+                            rays[k] = camera.primary_ray(px, py); // §3
+                        }
+                        local.primary += std::uint64_t(n);
+                        detail::trace_tile(scene, rays, n, opaque, opt, local, skip, sum);
                     }
-                image(x, row) = to_rgb8(sum / T(N * N), opt.encoding);
+                for (int k = 0; k < n; ++k)
+                    image(x0 + k % tile_w, row0 + k / tile_w) = to_rgb8(sum[k] / T(N * N), opt.encoding);
             }
-            const int done = rows_done.fetch_add(1) + 1;
+            const int done = rows_done.fetch_add(band_rows) + band_rows;
             if (reporter && show_progress) {
                 const auto now = std::chrono::steady_clock::now();
                 if (now - start > std::chrono::seconds(1) && now - last_report > std::chrono::milliseconds(100)) {
