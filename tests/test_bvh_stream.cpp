@@ -12,6 +12,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace {
@@ -213,4 +214,41 @@ TEST_CASE_TEMPLATE("Bvh: of triangles hit at the same t the lowest index wins, s
         wrong += one.primitive != lowest_a && one.primitive != lowest_b;
     }
     CHECK(wrong == 0);
+}
+
+TEST_CASE("Bvh stream: camera tiles form full packets where packets are compiled, random rays none") {
+    const std::string path = isin::bvh_code_paths.packets;
+    MESSAGE("stream calls: ", path);
+#if defined(ISIN_DETAIL_PACKETS)
+    CHECK(path == "16 rays, avx2+fma");
+    const auto load = [](const isin::Ray<float>* rays, float(&c)[6][16]) {
+        for (int k = 0; k < 16; ++k)
+            for (int a = 0; a < 3; ++a)
+                c[a][k] = isin::component(rays[k].origin, a), c[3 + a][k] = isin::component(rays[k].direction, a);
+    };
+    alignas(32) float c[6][16];
+    float t_max[16];
+    for (float& t : t_max) t = std::numeric_limits<float>::infinity();
+    const auto tiles = tiled_camera_rays<float>({0, 0, -25}, 0.6f, 64, 48);
+    int full = 0;
+    for (std::size_t i = 0; i < tiles.size(); i += 16) {
+        load(tiles.data() + i, c);
+        isin::detail::RayPacket p;
+        full += isin::detail::make_packet(p, c, 16, t_max, 100.0f) == 0xffffu;
+    }
+    CHECK(full == int(tiles.size() / 16));
+    std::mt19937_64 rng(4);
+    std::uniform_real_distribution<float> uni(-1, 1);
+    std::vector<isin::Ray<float>> random(16);
+    int formed = 0;
+    for (int i = 0; i < 100; ++i) {
+        for (auto& r : random) r = {{uni(rng), uni(rng), uni(rng)}, {uni(rng), uni(rng), uni(rng)}};
+        load(random.data(), c);
+        isin::detail::RayPacket p;
+        formed += isin::detail::make_packet(p, c, 16, t_max, 100.0f) != 0;
+    }
+    CHECK(formed == 0);
+#else
+    CHECK(path == "single rays");
+#endif
 }

@@ -68,6 +68,17 @@ inline int lowest_bit(unsigned mask) noexcept {
 #endif
 }
 
+/// Number of set bits of a mask.
+inline int bit_count(unsigned mask) noexcept {
+#if ISIN_VECTOR_EXTENSIONS
+    return __builtin_popcount(mask);
+#else
+    int n = 0;
+    for (; mask; mask &= mask - 1) ++n;
+    return n;
+#endif
+}
+
 // Eight and four lanes of T as GCC/Clang vectors. Values of these types never cross a function
 // boundary (that would depend on the target's vector ABI); all lane code is written inline.
 #if ISIN_VECTOR_EXTENSIONS

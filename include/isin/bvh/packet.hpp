@@ -7,8 +7,7 @@
 /// The interval test is conservative, so the packet visits every node any of its rays enters;
 /// each child it lets in then takes the rays' own slab tests (traverse.hpp's fast form, lane by
 /// lane on the rays), so that a child no ray enters is dropped (shadow rays from a patch of
-/// surface spread their origins, and the interval test alone let in twice the leaves) and the
-/// children are ordered by their rays' own entries.
+/// surface spread their origins, and the interval test alone let in twice the leaves).
 /// Packets need AVX + FMA and float (ISIN_DETAIL_PACKETS); callers fall back to single rays
 /// elsewhere, and for rays that are not coherent (make_packet says which).
 #include <cstddef>
@@ -42,6 +41,9 @@ struct alignas(32) RayPacket {
 /// The cosine of the widest angle between the rays of a packet: beyond it rays go one by one
 /// (the interval test of a packet spread wider lets in many nodes that few of its rays enter).
 inline constexpr float packet_cone_cos = 0.995f;
+/// The fewest rays a packet is worth: fewer go one by one (a packet's node steps cost about
+/// what four rays' do).
+inline constexpr int packet_min_rays = 4;
 
 // The least and the greatest of 16 lanes (two registers).
 inline float lanes_min(__m256 a, __m256 b) noexcept {
@@ -62,8 +64,8 @@ inline float lanes_max(__m256 a, __m256 b) noexcept {
 /// and t_max > 0 that share the first such ray's octant and lie within packet_cone_cos of its
 /// direction; then, eight lanes at a time, their slab constants by prepare_slab's rules (so as
 /// conservative), dropping any whose products could overflow (prepare_slab's robust form).
-/// Returns the rays in the packet (p.lanes), at least two, or 0; the others are for the
-/// single-ray path.
+/// Returns the rays in the packet (p.lanes), at least packet_min_rays, or 0; the others are for
+/// the single-ray path.
 inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], int n, const float* t_max,
                             float bound) noexcept {
     for (int k = 0; k < RayPacket::size; ++k) p.t_far[k] = k < n ? t_max[k] : -1.0f;
@@ -102,7 +104,7 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
         cone |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(d_d0, bound_cos, _CMP_GE_OQ))) << g;
     }
     lanes &= cone;
-    if (!(lanes & (lanes - 1))) return 0;
+    if (bit_count(lanes) < packet_min_rays) return 0;
     // The slab constants, as prepare_slab's fast form; a lane whose products could overflow
     // leaves the packet.
     constexpr float u = std::numeric_limits<float>::epsilon() / 2;
@@ -132,7 +134,7 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
         fast |= unsigned(_mm256_movemask_ps(ok)) << g;
     }
     lanes &= fast;
-    if (!(lanes & (lanes - 1))) return 0;
+    if (bit_count(lanes) < packet_min_rays) return 0;
     p.lanes = lanes;
     // Lanes outside the packet: never entered (t_far < 0), and out of the intervals.
     const __m256 in[2] = {
@@ -204,31 +206,13 @@ inline unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPack
 /// form, lane by lane, on the rays instead of the children (the rays' test of a leaf's box).
 inline unsigned packet_rays_entering(const BvhTree<float>::Node& n, int k, const RayPacket& p) noexcept {
     unsigned rays = 0;
-    for (int g = 0; g < RayPacket::size; g += 8) {
-        __m256 t0[3], t1[3];
-        for (int a = 0; a < 3; ++a) {
-            const __m256 near_plane = _mm256_set1_ps(plane<float>(n, p.near_plane[a])[k]);
-            const __m256 far_plane = _mm256_set1_ps(plane<float>(n, p.far_plane[a])[k]);
-            t0[a] = _mm256_fmsub_ps(near_plane, _mm256_load_ps(p.inv[a] + g), _mm256_load_ps(p.org_inv_near[a] + g));
-            t1[a] = _mm256_fmsub_ps(far_plane, _mm256_load_ps(p.inv_far[a] + g), _mm256_load_ps(p.org_inv_far[a] + g));
-        }
-        const __m256 tn = _mm256_max_ps(_mm256_max_ps(t0[0], t0[1]), _mm256_max_ps(t0[2], _mm256_setzero_ps()));
-        const __m256 tf = _mm256_min_ps(_mm256_min_ps(t1[0], t1[1]), _mm256_min_ps(t1[2], _mm256_load_ps(p.t_far + g)));
-        rays |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ))) << g;
-    }
-    return rays;
-}
-
-/// As packet_rays_entering, and `t_min` gets the least entry distance of those rays (+∞ for none).
-inline unsigned packet_rays_entering(const BvhTree<float>::Node& n, int k, const RayPacket& p, float& t_min) noexcept {
-    unsigned rays = 0;
-    __m256 least = _mm256_set1_ps(std::numeric_limits<float>::infinity());
     __m256 near_plane[3], far_plane[3];
     for (int a = 0; a < 3; ++a) {
         near_plane[a] = _mm256_set1_ps(plane<float>(n, p.near_plane[a])[k]);
         far_plane[a] = _mm256_set1_ps(plane<float>(n, p.far_plane[a])[k]);
     }
     for (int g = 0; g < RayPacket::size; g += 8) {
+        if (!((p.lanes >> g) & 0xffu)) continue; // no ray left in these lanes
         __m256 t0[3], t1[3];
         for (int a = 0; a < 3; ++a) {
             t0[a] = _mm256_fmsub_ps(near_plane[a], _mm256_load_ps(p.inv[a] + g), _mm256_load_ps(p.org_inv_near[a] + g));
@@ -237,13 +221,8 @@ inline unsigned packet_rays_entering(const BvhTree<float>::Node& n, int k, const
         }
         const __m256 tn = _mm256_max_ps(_mm256_max_ps(t0[0], t0[1]), _mm256_max_ps(t0[2], _mm256_setzero_ps()));
         const __m256 tf = _mm256_min_ps(_mm256_min_ps(t1[0], t1[1]), _mm256_min_ps(t1[2], _mm256_load_ps(p.t_far + g)));
-        const __m256 in = _mm256_cmp_ps(tn, tf, _CMP_LE_OQ);
-        least = _mm256_min_ps(least, _mm256_blendv_ps(_mm256_set1_ps(std::numeric_limits<float>::infinity()), tn, in));
-        rays |= unsigned(_mm256_movemask_ps(in)) << g;
+        rays |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ))) << g;
     }
-    __m128 h = _mm_min_ps(_mm256_castps256_ps128(least), _mm256_extractf128_ps(least, 1));
-    h = _mm_min_ps(h, _mm_movehl_ps(h, h));
-    t_min = _mm_cvtss_f32(_mm_min_ss(h, _mm_shuffle_ps(h, h, 1)));
     return rays;
 }
 
@@ -256,10 +235,10 @@ inline float packet_t_far(const RayPacket& p) noexcept {
     return _mm_cvtss_f32(h);
 }
 
-/// Traces the packet through `tree`, nearest-first by the least entry of its rays
+/// Traces the packet through `tree`, nearest-first by the packet's entry bounds
 /// (Visit::nearest) or in any order (Visit::any). At a node, the interval test picks the
 /// children some ray of the packet may enter, and each ray's own slab test keeps those that one
-/// does (with the rays that do, and the least of their entries). At each leaf some of its rays
+/// does (with the rays that do). At each leaf some of its rays
 /// enter, calls `leaf(leaf_index, rays, p.t_far)` with the mask of those rays; the leaf lowers
 /// their t_far (nearest) and returns the rays it is done with (any: they leave the packet).
 /// Stops when the stack is empty or no ray is left.
@@ -269,7 +248,7 @@ void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
     constexpr std::uint32_t leaf_bit = BvhTree<float>::leaf_bit;
     struct Entry {
         std::uint32_t ref;
-        float t;                    // the least entry distance of its rays
+        float t;                    // no ray of the packet enters it before this
         unsigned rays;              // the rays that enter it (when it was pushed)
         std::uint32_t parent, slot; // where its box is: child `slot` of node `parent`
     };
@@ -300,7 +279,7 @@ void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
             unsigned mask = packet_hit_children(n, p, t_packet, t_near);
             for (unsigned m = mask; m; m &= m - 1) { // each ray's own test: the children one enters
                 const int k = lowest_bit(m);
-                rays[k] = packet_rays_entering(n, k, p, t_near[k]) & p.lanes;
+                rays[k] = packet_rays_entering(n, k, p) & p.lanes;
                 if (!rays[k]) mask &= ~(1u << k);
             }
             if (mask) {

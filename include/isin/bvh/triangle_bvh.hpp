@@ -23,10 +23,12 @@ namespace isin {
 /// Which form of its code the Bvh was compiled to for float rays (a build's flags choose, and
 /// ISIN_FORCE_PURE turns every vector form off): the node test ("avx+fma", "avx", "vector
 /// extensions" or "portable") and the triangle leaf ("avx2+fma", "vector extensions" or
-/// "portable"). For logs and tests that a build takes the path it was meant to.
+/// "portable"), and the stream calls' ("16 rays, avx2+fma": packets; or "single rays"). For logs
+/// and tests that a build takes the path it was meant to.
 struct BvhCodePaths {
     const char* slabs;
     const char* leaf;
+    const char* packets;
 };
 inline constexpr BvhCodePaths bvh_code_paths {
 #if defined(ISIN_DETAIL_SLABS_AVX) && defined(__FMA__)
@@ -44,6 +46,11 @@ inline constexpr BvhCodePaths bvh_code_paths {
         "vector extensions",
 #else
         "portable",
+#endif
+#if defined(ISIN_DETAIL_PACKETS)
+        "16 rays, avx2+fma",
+#else
+        "single rays",
 #endif
 };
 
@@ -265,6 +272,14 @@ private:
     unsigned trace_packet(const RayAt& ray_at, std::size_t first, int n, const float* t_max, Hit<float>* hits,
                           std::uint8_t* blocked, const HitFilter& filter) const noexcept {
         constexpr int size = detail::RayPacket::size;
+        // Incoherent rays leave here, before the packet's set-up: too few share the first's octant.
+        const auto octant = [](const Vertex<float>& d) {
+            return int(std::signbit(d.x)) | int(std::signbit(d.y)) << 1 | int(std::signbit(d.z)) << 2;
+        };
+        const int first_octant = octant(ray_at(first).direction);
+        int same = 0;
+        for (int k = 0; k < n; ++k) same += octant(ray_at(first + std::size_t(k)).direction) == first_octant;
+        if (same < detail::packet_min_rays) return 0;
         alignas(32) float c[6][size]; // the rays, lane by lane
         float limit[size];
         for (int k = 0; k < size; ++k) {
