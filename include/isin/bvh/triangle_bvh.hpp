@@ -277,8 +277,11 @@ private:
             return int(std::signbit(d.x)) | int(std::signbit(d.y)) << 1 | int(std::signbit(d.z)) << 2;
         };
         const int first_octant = octant(ray_at(first).direction);
-        int same = 0;
-        for (int k = 0; k < n; ++k) same += octant(ray_at(first + std::size_t(k)).direction) == first_octant;
+        int same = 1;
+        for (int k = 1; k < n; ++k) {
+            same += octant(ray_at(first + std::size_t(k)).direction) == first_octant;
+            if (k == 3 && same == 1) return 0; // not one of the first three neighbours: incoherent
+        }
         if (same < detail::packet_min_rays) return 0;
         alignas(32) float c[6][size]; // the rays, lane by lane
         float limit[size];
