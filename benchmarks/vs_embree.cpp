@@ -459,21 +459,31 @@ struct PacketBench {
             };
             std::vector<double> sec[measures];
             Totals tot[measures];
-            for (int rep = 0; rep < opt.repeats; ++rep) { // interleaved
-                double t = 0;
-                tot[primary_stream] = isin_stream(primary, threads, t), sec[primary_stream].push_back(t);
-                tot[primary_single] = isin_single(primary, threads, t), sec[primary_single].push_back(t);
-                tot[primary_e8] = embree_n<8, RTCRayHit8>(primary, true, threads, t), sec[primary_e8].push_back(t);
-                tot[primary_e16] = embree_n<16, RTCRayHit16>(primary, true, threads, t), sec[primary_e16].push_back(t);
-                tot[shadow_stream] = isin_occluded(threads, t), sec[shadow_stream].push_back(t);
-                tot[shadow_single] = isin_occluded_single(threads, t), sec[shadow_single].push_back(t);
-                tot[shadow_e8] = embree_occluded_n<8, RTCRay8>(threads, t), sec[shadow_e8].push_back(t);
-                tot[shadow_e16] = embree_occluded_n<16, RTCRay16>(threads, t), sec[shadow_e16].push_back(t);
-                tot[diffuse_stream] = isin_stream(diffuse, threads, t), sec[diffuse_stream].push_back(t);
-                tot[diffuse_single] = isin_single(diffuse, threads, t), sec[diffuse_single].push_back(t);
-                tot[diffuse_e1] = embree1(diffuse, threads, t), sec[diffuse_e1].push_back(t);
-                tot[diffuse_e16] = embree_n<16, RTCRayHit16>(diffuse, false, threads, t), sec[diffuse_e16].push_back(t);
-            }
+            // Interleaved, and each group's order turned by one every repeat: a measure that
+            // always came right after the other library's would always start with its caches.
+            const auto measure = [&](int m, double& t) -> Totals {
+                switch (m) {
+                case primary_stream: return isin_stream(primary, threads, t);
+                case primary_single: return isin_single(primary, threads, t);
+                case primary_e8: return embree_n<8, RTCRayHit8>(primary, true, threads, t);
+                case primary_e16: return embree_n<16, RTCRayHit16>(primary, true, threads, t);
+                case shadow_stream: return isin_occluded(threads, t);
+                case shadow_single: return isin_occluded_single(threads, t);
+                case shadow_e8: return embree_occluded_n<8, RTCRay8>(threads, t);
+                case shadow_e16: return embree_occluded_n<16, RTCRay16>(threads, t);
+                case diffuse_stream: return isin_stream(diffuse, threads, t);
+                case diffuse_single: return isin_single(diffuse, threads, t);
+                case diffuse_e1: return embree1(diffuse, threads, t);
+                default: return embree_n<16, RTCRayHit16>(diffuse, false, threads, t);
+                }
+            };
+            for (int rep = 0; rep < opt.repeats; ++rep)
+                for (int group = 0; group < measures; group += 4)
+                    for (int j = 0; j < 4; ++j) {
+                        const int m = group + (j + rep) % 4;
+                        double t = 0;
+                        tot[m] = measure(m, t), sec[m].push_back(t);
+                    }
             double mrays[measures];
             for (int m = 0; m < measures; ++m) {
                 const double rays = double(m < shadow_stream    ? primary.size()

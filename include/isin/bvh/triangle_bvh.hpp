@@ -269,8 +269,9 @@ private:
 #if defined(ISIN_DETAIL_PACKETS)
     // The packet part of trace_chunk (float): returns the rays it traced.
     template <Visit visit, class RayAt>
-    unsigned trace_packet(const RayAt& ray_at, std::size_t first, int n, const float* t_max, Hit<float>* hits,
-                          std::uint8_t* blocked, const HitFilter& filter) const noexcept {
+    ISIN_DETAIL_NOINLINE unsigned trace_packet(const RayAt& ray_at, std::size_t first, int n, const float* t_max,
+                                               Hit<float>* hits, std::uint8_t* blocked,
+                                               const HitFilter& filter) const noexcept {
         constexpr int size = detail::RayPacket::size;
         // Incoherent rays leave here, before the packet's set-up: too few share the first's octant.
         const auto octant = [](const Vertex<float>& d) {
