@@ -169,7 +169,7 @@ inline unsigned hit_children(const typename BvhTree<T>::Node& n, const SlabRay<T
 }
 
 template <Visit visit, bool robust, class T, class Leaf>
-bool walk(const BvhTree<T>& tree, const SlabRay<T>& r, T& t_max, Leaf& leaf) {
+bool walk(const BvhTree<T>& tree, const SlabRay<T>& r, T& t_max, Leaf& leaf, std::uint32_t root = 0) {
     using Node = typename BvhTree<T>::Node;
     constexpr std::uint32_t leaf_bit = BvhTree<T>::leaf_bit;
     constexpr bool any_hit = visit == Visit::any;
@@ -179,7 +179,7 @@ bool walk(const BvhTree<T>& tree, const SlabRay<T>& r, T& t_max, Leaf& leaf) {
     };
     Entry stack[7 * BvhTree<T>::depth_limit + 1]; // 7 entries a level at most
     int top = 0;
-    std::uint32_t ref = 0; // the node or leaf being visited
+    std::uint32_t ref = root; // the node or leaf being visited
     const Node* const nodes = tree.nodes().data();
     for (;;) {
         if (ref & leaf_bit) {
