@@ -12,6 +12,7 @@
 //   random_soup(n)       n small triangles scattered through the view, z ∈ [25, 65]
 #include <isin/isin.hpp>
 
+#include "../tests/common/secondary.hpp"
 #include "../tests/common/workloads.hpp"
 
 #include <cmath>
@@ -52,44 +53,13 @@ std::vector<isin::Triangle<T>> icosphere(int level, V3 centre = {0, 0, 40}, doub
     return workloads::icosphere<T>(centre, radius, level);
 }
 
-/// A tube of radius 0.45 (before scaling) swept along the trefoil knot
-/// p(s) = (sin s + 2 sin 2s, cos s − 2 cos 2s, −sin 3s), with the Frenet frame (the curvature
-/// never vanishes on this curve; the frame is periodic, so the tube closes). `segments` along the
-/// curve × `sides` around: 2·segments·sides triangles. Strands stay ≥ 1.2 apart and the radius
-/// of curvature is ≥ 1.28, so the tube does not intersect itself.
+/// A tube of radius 0.45 (before scaling) swept along the trefoil knot, `segments` along the curve
+/// × `sides` around: 2·segments·sides triangles (workloads::trefoil, shared with the secondary-ray
+/// study and its tests).
 template <class T>
 std::vector<isin::Triangle<T>> trefoil(int segments = 1000, int sides = 150, V3 centre = {0, 0, 45},
                                        double scale = 5.4) {
-    const double pi = 3.14159265358979323846, r = 0.45;
-    const auto n_seg = std::size_t(segments), n_side = std::size_t(sides);
-    std::vector<V3> ring_centre(n_seg), grid(n_seg * n_side);
-    for (std::size_t i = 0; i < n_seg; ++i) {
-        const double s = 2 * pi * double(i) / double(segments);
-        const V3 p{std::sin(s) + 2 * std::sin(2 * s), std::cos(s) - 2 * std::cos(2 * s) + 0.47, -std::sin(3 * s)};
-        const V3 d1{std::cos(s) + 4 * std::cos(2 * s), -std::sin(s) + 4 * std::sin(2 * s), -3 * std::cos(3 * s)};
-        const V3 d2{-std::sin(s) - 8 * std::sin(2 * s), -std::cos(s) + 8 * std::cos(2 * s), 9 * std::sin(3 * s)};
-        const V3 tangent = isin::normalize(d1), binormal = isin::normalize(isin::cross(d1, d2));
-        const V3 normal = isin::cross(binormal, tangent);
-        ring_centre[i] = centre + scale * p;
-        for (std::size_t j = 0; j < n_side; ++j) {
-            const double a = 2 * pi * double(j) / double(sides);
-            grid[i * n_side + j] = centre + scale * (p + r * (std::cos(a) * normal + std::sin(a) * binormal));
-        }
-    }
-    std::vector<isin::Triangle<T>> out;
-    out.reserve(2 * n_seg * n_side);
-    for (std::size_t i = 0; i < n_seg; ++i) {
-        const std::size_t i1 = (i + 1) % n_seg;
-        const V3 axis = 0.5 * (ring_centre[i] + ring_centre[i1]);
-        for (std::size_t j = 0; j < n_side; ++j) {
-            const std::size_t j1 = (j + 1) % n_side;
-            const V3 &a = grid[i * n_side + j], &b = grid[i1 * n_side + j], &c = grid[i1 * n_side + j1],
-                     &d = grid[i * n_side + j1];
-            out.push_back(oriented<T>(a, b, c, (a + b + c) / 3.0 - axis));
-            out.push_back(oriented<T>(a, c, d, (a + c + d) / 3.0 - axis));
-        }
-    }
-    return out;
+    return workloads::trefoil<T>(segments, sides, centre, scale);
 }
 
 namespace detail {

@@ -104,7 +104,6 @@ struct Shading {
     const Material<T>* m;
     Color<T> object, local;
     Vertex<T> Nf, Ns, V, above, shadow_from;
-    T scale;
     bool entering;
 };
 
@@ -127,10 +126,16 @@ Shading<T> begin_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const H
     s.Ns = dot(sp.shading_normal, s.Nf) < T(0) ? -sp.shading_normal : sp.shading_normal;
     s.V = -d;                                                          // §7: towards the eye
     s.local = m.ka * m.ambient_color * s.object * scene.ambient_light; // §7: ambient
-    s.scale = max_abs(ray.origin);                                     // the hit point's rounding grows with it
-    s.above = offset_origin(sp.point, s.Nf, s.scale);
-    // Shadow rays leave from the shading point (= the hit point on flat surfaces), off the surface.
-    s.shadow_from = sp.shading_point == sp.point ? s.above : offset_origin(sp.shading_point, s.Nf, s.scale);
+    // Secondary rays start off the surface by the hit point's error bound (pbrt-v4 §6.8.6): above
+    // it (reflection, shadow rays) or, for refraction, below it (end_shading).
+    const BoundedPoint<T> p{sp.point, sp.error};
+    s.above = offset_ray_origin(p, s.Nf, s.Nf);
+    // Shadow rays leave from the shading point (= the hit point on flat surfaces), off the surface;
+    // Hanika's lift adds one rounding to the point's error.
+    s.shadow_from = sp.shading_point == sp.point
+                        ? s.above
+                        : offset_ray_origin({sp.shading_point, sp.error + rounding_gamma<T>(1) * abs(sp.shading_point)},
+                                            s.Nf, s.Nf);
     return s;
 }
 
@@ -205,7 +210,8 @@ Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shadi
                 dir = reflect(d, s.Nf), reflected = true; // total internal reflection
         }
         ++stats.refraction;
-        const Vertex<T> origin = reflected ? s.above : offset_origin(s.sp.point, -s.Nf, s.scale);
+        const Vertex<T> origin =
+            reflected ? s.above : offset_ray_origin(BoundedPoint<T>{s.sp.point, s.sp.error}, s.Nf, -s.Nf);
         result += m.transparency * trace(scene, Ray<T>{origin, dir}, depth + 1, opt, stats);
     }
     return result;

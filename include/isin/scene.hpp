@@ -29,6 +29,7 @@
 #include "bvh.hpp"
 #include "color.hpp"
 #include "detail/attributes.hpp"
+#include "error_bound.hpp"
 #include "hit.hpp"
 #include "indexed_mesh.hpp"
 #include "ray.hpp"
@@ -63,7 +64,7 @@ struct Object {
 // ---- per-kind customisation points ---------------------------------------------------------------
 // A kind of primitive needs `intersect_primitive(ray, shape, TriangleMethod)` (a Hit), `bounds(shape)`
 // (a Box, for its Bvh), `surface_normal(shape, point, hit)` (unit) and `triangle_of(shape)` (its
-// plain triangle for culling, or nullptr); texture_coordinates is optional. A user's kind defines
+// plain triangle for culling, or nullptr); texture_coordinates and hit_point are optional. A user's kind defines
 // them in its own namespace (found by argument-dependent lookup), as tests/test_render.cpp does.
 
 template <class T>
@@ -100,9 +101,35 @@ template <class T>
     return bounds(tri.triangle);
 }
 
+/// The hit point of a primitive with its error bound (optional customisation point): spheres and
+/// triangles rebuild it on the surface (sphere.hpp, triangle.hpp); a kind without its own takes
+/// Ro + t·Rd with a generous bound (error_bound.hpp, point_on_ray).
+template <class T, class Shape>
+[[nodiscard]] inline BoundedPoint<T> hit_point(const Ray<T>& ray, const Shape&, const Hit<T>& hit) noexcept {
+    return point_on_ray(ray.origin, ray.direction, hit.t);
+}
+template <class T>
+[[nodiscard]] inline BoundedPoint<T> hit_point(const Ray<T>& ray, const TexturedTriangle<T>& tri,
+                                               const Hit<T>& hit) noexcept {
+    return hit_point(ray, tri.triangle, hit);
+}
+
 template <class T>
 [[nodiscard]] inline Vertex<T> surface_normal(const Sphere<T>& sp, const Vertex<T>& p, const Hit<T>&) noexcept {
     return normal_at(sp, p);
+}
+/// The unit normal of a hit given its ray (optional customisation point): by default
+/// surface_normal(shape, point, hit); spheres take it from the ray (normal_at(ray, sphere, hit)),
+/// right where the hit point's own rounding is not.
+template <class T, class Shape>
+[[nodiscard]] inline Vertex<T> surface_normal(const Ray<T>&, const Shape& shape, const Vertex<T>& p,
+                                              const Hit<T>& hit) noexcept {
+    return surface_normal(shape, p, hit);
+}
+template <class T>
+[[nodiscard]] inline Vertex<T> surface_normal(const Ray<T>& ray, const Sphere<T>& sp, const Vertex<T>&,
+                                              const Hit<T>& hit) noexcept {
+    return normal_at(ray, sp, hit);
 }
 template <class T>
 [[nodiscard]] inline Vertex<T> surface_normal(const Triangle<T>& tri, const Vertex<T>&, const Hit<T>&) noexcept {
@@ -161,7 +188,11 @@ template <class T>
 /// point of smooth (Phong) shading, material, texture coordinates and vertex colour.
 template <class T>
 struct SurfacePoint {
-    Vertex<T> point;  ///< on the ray
+    /// The hit point, rebuilt on the surface where the primitive can (a triangle's barycentrics,
+    /// a sphere's reprojection: `hit_point`), and the bound on its error: the exact surface point
+    /// lies within point ± error. Secondary rays start at offset_ray_origin({point, error}, …).
+    Vertex<T> point;
+    Vertex<T> error;
     Vertex<T> normal; ///< the surface's own (geometric) unit normal, out of its front face
     /// Unit normal for lighting: interpolated from a mesh's vertex normals by the hit's
     /// barycentrics (Phong 1975), out of the same side as `normal`; else `normal`.
@@ -528,14 +559,17 @@ public:
     /// Point, normals, material, texture coordinates and colour of a hit of `ray`.
     [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const Hit<T>& hit) const {
         SurfacePoint<T> sp{};
-        sp.point = ray.at(hit.t);
-        sp.shading_point = sp.point;
         sp.tint = {T(1), T(1), T(1)};
         if (hit.geometry >= kinds) { // a placed mesh
             const Instance& inst = instances_.at(hit.geometry - kinds);
             const Mesh<T>& mesh = *meshes_[inst.mesh].mesh;
             const auto& k = mesh.indices.at(hit.primitive);
             const Triangle<T> tri = mesh.triangle(hit.primitive);
+            // The point from the barycentrics in the mesh's own space, then to the world with its bound.
+            const BoundedPoint<T> local = hit_point(ray, tri, hit);
+            const BoundedPoint<T> world = inst.identity ? local : inst.to_world.bounded_point(local);
+            sp.point = world.point, sp.error = world.error;
+            sp.shading_point = sp.point;
             // §2 normal of the mesh's triangle (out of its clockwise face), to world space by the
             // inverse transpose: out of the same side after any transform, mirrors included.
             const Vertex<T> geometric = normal(tri);
@@ -556,7 +590,10 @@ public:
         for_each_kind([&](auto kind, const auto& vec) {
             if (kind != hit.geometry) return;
             const auto& obj = vec.at(hit.primitive);
-            sp.normal = surface_normal(obj.shape, sp.point, hit);
+            const BoundedPoint<T> p = hit_point(ray, obj.shape, hit);
+            sp.point = p.point, sp.error = p.error;
+            sp.shading_point = sp.point;
+            sp.normal = surface_normal(ray, obj.shape, sp.point, hit);
             sp.shading_normal = sp.normal;
             sp.material = obj.material;
             sp.has_texture_coordinates = texture_coordinates(obj.shape, hit, sp.st);

@@ -2,6 +2,7 @@
 /// isin — spheres and the geometric ray–sphere test of note §6.
 #include <limits>
 
+#include "error_bound.hpp"
 #include "hit.hpp"
 #include "ray.hpp"
 #include "vec.hpp"
@@ -25,15 +26,53 @@ template <class T>
     return normalize(p - sp.center);
 }
 
-/// Half-width, in l2 = |C − Ro|², of the band around the surface in which a ray origin counts as
-/// lying on the sphere. A point on the surface (a hit point, where secondary rays start) is off by
-/// a few ε of the coordinates involved, so l2 − r2 ≈ 2r·δ with δ ≲ ε(r + |C| + |Ro|). This replaces
-/// the note's absolute `l2 > r2 + 0.001` (§8), which is 1000× too wide at r = 1e-3 and below the
-/// rounding of l2 at r = 1e4.
+/// P − C for the point P = Ro + t·Rd of a ray, as (Ro − C) + t·Rd: rounded at the scale of the
+/// eye's distance from the sphere, not at |P| — for a sphere a few ulps across far from the
+/// origin, P itself is rounded by a good part of the radius.
 template <class T>
-[[nodiscard]] inline T surface_band(const Sphere<T>& sp, const Vertex<T>& origin) noexcept {
-    constexpr T eps = std::numeric_limits<T>::epsilon();
-    return T(64) * eps * sp.radius * (sp.radius + max_abs(sp.center) + max_abs(origin));
+[[nodiscard]] inline Vertex<T> offset_from_center(const Ray<T>& ray, const Sphere<T>& sp, T t) noexcept {
+    return (ray.origin - sp.center) + t * ray.direction;
+}
+
+/// Outward unit normal of the sphere where `ray` hits it: from offset_from_center, so that it is
+/// right to the eye's distance, not to |P| (normal_at(sp, P) is off by up to ulp(|C|)/r radians,
+/// enough to make a grazing ray look as if it came from inside a tiny far sphere).
+template <class T>
+[[nodiscard]] inline Vertex<T> normal_at(const Ray<T>& ray, const Sphere<T>& sp, const Hit<T>& hit) noexcept {
+    return normalize(offset_from_center(ray, sp, hit.t));
+}
+
+/// Bound on the error of a point that `hit_point` puts on the sphere: γ₅·r from the reprojection
+/// onto the sphere about its centre, γ₁·(|C|∞ + r) from adding the centre back (pbrt-v4 §6.8.5),
+/// per component.
+template <class T>
+[[nodiscard]] inline T surface_point_error(const Sphere<T>& sp) noexcept {
+    return rounding_gamma<T>(6) * sp.radius + rounding_gamma<T>(1) * max_abs(sp.center);
+}
+
+/// Half-width, in l2 − r2 (l2 = |C − Ro|²), of the band around the surface in which a ray origin
+/// counts as lying on the sphere: where a point from `hit_point` may lie (within √3·e of the
+/// surface, e = surface_point_error), l2 − r2 ≈ 2r·√3·e, plus the rounding of l2 − r2 itself,
+/// γ₆·(l2 + r2). From the error bounds (pbrt-v4 §6.8), not a fixed multiple: it does not grow with
+/// the distance of the eye the hit point was seen from, and is a few ulps wide in float. This
+/// replaces the note's absolute `l2 > r2 + 0.001` (§8), which is 1000× too wide at r = 1e-3 and
+/// below the rounding of l2 at r = 1e4.
+template <class T>
+[[nodiscard]] inline T surface_band(const Sphere<T>& sp, T l2) noexcept {
+    const T e = T(1.7320508075688772) * surface_point_error(sp); // √3·e: the error box's diagonal
+    const T r2 = sp.radius * sp.radius;
+    return e * (T(2) * sp.radius + e) + rounding_gamma<T>(6) * (l2 + r2);
+}
+
+/// The hit point of a sphere hit: Ro + t·Rd moved radially onto the sphere, C + r·(P − C)/|P − C|,
+/// and its error bound (pbrt-v4 §6.8.5: reprojection). Its error depends on the sphere alone, not
+/// on how far the ray came from; restarting a ray from it, raw, is what `surface_band` expects.
+template <class T>
+[[nodiscard]] inline BoundedPoint<T> hit_point(const Ray<T>& ray, const Sphere<T>& sp, const Hit<T>& hit) noexcept {
+    Vertex<T> pl = offset_from_center(ray, sp, hit.t);
+    pl = (sp.radius / length(pl)) * pl; // pbrt-v4: reproject onto the sphere
+    const Vertex<T> P = sp.center + pl;
+    return {P, rounding_gamma<T>(5) * abs(pl) + rounding_gamma<T>(1) * abs(P)}; // γ₅|P − C| + γ₁|P|
 }
 
 /// Geometric ray–sphere test of note §6, isin's default. Nearest hit with t > 0, t in units of
@@ -64,11 +103,11 @@ template <class T>
     const T q = std::sqrt((r2 - m2) * inv_a); // §6: q = √(r2 − m2)
     const T c = (l2 - r2) * inv_a;            // t_near · t_far
     T t;
-    if (std::fabs(l2 - r2) <= surface_band(sp, ray.origin)) { // §8 fix, scale-relative: on the surface
-        if (!(s > T(0))) return Hit<T>::miss();               // leaving the sphere: no self-hit
-        t = s + q;                                            // entering: the far side
-    } else if (l2 > r2) {                                     // §6: origin outside (s ≥ 0 here)
-        t = c / (s + q);                                      // §6: t = s − q, without cancellation
+    if (std::fabs(l2 - r2) <= surface_band(sp, l2)) { // §8 fix, scale-relative: on the surface
+        if (!(s > T(0))) return Hit<T>::miss();       // leaving the sphere: no self-hit
+        t = s + q;                                    // entering: the far side
+    } else if (l2 > r2) {                             // §6: origin outside (s ≥ 0 here)
+        t = c / (s + q);                              // §6: t = s − q, without cancellation
     } else {
         t = s >= T(0) ? s + q : c / (s - q); // §6: origin inside → t = s + q
     }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <type_traits>
 
+#include "error_bound.hpp"
 #include "vec.hpp"
 
 namespace isin {
@@ -50,6 +51,17 @@ struct Transform {
 
     /// M·p + d: where the point p goes.
     [[nodiscard]] constexpr Vertex<T> point(const Vertex<T>& p) const noexcept { return vector(p) + d; }
+    /// Where a point with an error bound goes, and its bound: the rounding of M·p + d, γ₄·(|M|·|p| +
+    /// |d|), plus the incoming error carried through, (1 + γ₄)·|M|·error (pbrt-v4 §6.8.6).
+    [[nodiscard]] BoundedPoint<T> bounded_point(const BoundedPoint<T>& p) const noexcept {
+        const Vertex<T> a = abs(p.point), e = p.error;
+        const auto row = [&](int i, const Vertex<T>& v) {
+            return std::fabs(m[i][0]) * v.x + std::fabs(m[i][1]) * v.y + std::fabs(m[i][2]) * v.z;
+        };
+        const Vertex<T> rounding{row(0, a) + std::fabs(d.x), row(1, a) + std::fabs(d.y), row(2, a) + std::fabs(d.z)};
+        const Vertex<T> carried{row(0, e), row(1, e), row(2, e)};
+        return {point(p.point), rounding_gamma<T>(4) * rounding + (T(1) + rounding_gamma<T>(4)) * carried};
+    }
     /// M·v: where the direction (or difference of points) v goes.
     [[nodiscard]] constexpr Vertex<T> vector(const Vertex<T>& v) const noexcept {
         return {m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z, m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,

@@ -1,0 +1,52 @@
+#pragma once
+/// isin — bounds on rounding errors (pbrt-v4, 4th ed. §6.8): γₙ, and points that carry a bound on
+/// how far the exact point they stand for may lie from them.
+///
+///     const isin::BoundedPoint<float> p = isin::hit_point(ray, tri, hit); // p.point ± p.error
+///     isin::Ray<float> shadow{isin::offset_ray_origin(p, N, to_light), to_light}; // offset.hpp
+#include <cmath>
+#include <limits>
+#include <type_traits>
+
+#include "vec.hpp"
+
+namespace isin {
+
+/// γₙ = n·u / (1 − n·u) with u = ε/2, the unit roundoff: (1 ± u)ⁿ lies within 1 ± γₙ, so a result
+/// of n rounded operations in a row is off by at most γₙ times its exact value (Higham, "Accuracy
+/// and Stability of Numerical Algorithms", §3.1; pbrt-v4 §6.8.1).
+template <class T>
+[[nodiscard]] constexpr T rounding_gamma(int n) noexcept {
+    static_assert(std::is_floating_point_v<T>, "isin::rounding_gamma needs a floating-point type");
+    constexpr T u = std::numeric_limits<T>::epsilon() / T(2);
+    return T(n) * u / (T(1) - T(n) * u);
+}
+
+/// A point computed in floating point, and a bound on its error: the exact point it stands for lies
+/// in the box point ± error (component by component). pbrt-v4's Point3fi. Hit points of every
+/// primitive come as one (`hit_point`); secondary rays start off the box (`offset_ray_origin`).
+template <class T>
+struct BoundedPoint {
+    static_assert(std::is_floating_point_v<T>, "isin::BoundedPoint needs a floating-point type");
+    Vertex<T> point;
+    Vertex<T> error; ///< ≥ 0 in each component; +∞ when nothing is known
+};
+
+/// The component-wise absolute value |a|.
+template <class T>
+[[nodiscard]] inline Vertex<T> abs(const Vertex<T>& a) noexcept {
+    return {std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)};
+}
+
+/// The point Ro + t·Rd of a ray that met some surface at t, with a bound for primitives that have
+/// no `hit_point` of their own. t's own error is unknown here, so the bound is a generous multiple
+/// of the magnitudes involved, 64ε·(|Ro| + |t·Rd|) per component: the margin isin's fixed rule
+/// (`offset_origin`) gives, not the tight bound of a surface's own reconstruction.
+template <class T>
+[[nodiscard]] inline BoundedPoint<T> point_on_ray(const Vertex<T>& origin, const Vertex<T>& direction, T t) noexcept {
+    constexpr T eps = std::numeric_limits<T>::epsilon();
+    const Vertex<T> step = t * direction;
+    return {origin + step, (T(64) * eps) * (abs(origin) + abs(step))};
+}
+
+} // namespace isin
