@@ -129,3 +129,16 @@ TEST_CASE_TEMPLATE("hit_point: misses and non-finite input give non-finite point
     CHECK(q.point == isin::Vertex<T>{0, 0, 2});
     CHECK(q.error.z > T(0));
 }
+
+TEST_CASE_TEMPLATE("next_float steps one ulp, as std::nextafter, through zero and at the ends", T, float, double) {
+    const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
+    for (T v : {T(1), T(-1), T(0), T(-0.0), T(1e-30), T(-3.5e7), std::numeric_limits<T>::denorm_min(),
+                -std::numeric_limits<T>::denorm_min(), std::numeric_limits<T>::max(), -std::numeric_limits<T>::max()}) {
+        CAPTURE(v);
+        CHECK(isin::next_float(v) == std::nextafter(v, inf));
+        CHECK(isin::next_float(v, true) == std::nextafter(v, -inf));
+    }
+    CHECK(isin::next_float(inf) == inf);
+    CHECK(isin::next_float(-inf, true) == -inf);
+    CHECK(std::isnan(isin::next_float(nan)));
+}

@@ -91,7 +91,6 @@ private:
         const T* __restrict e2y = e2y_.data() + base;
         const T* __restrict e2z = e2z_.data() + base;
         constexpr T inf = std::numeric_limits<T>::infinity();
-        constexpr T gamma9 = rounding_gamma<T>(9);
         for (std::size_t k = 0; k < block; ++k) {
             const T px = dy * e2z[k] - dz * e2y[k]; // MT: P = Rd × E2
             const T py = dz * e2x[k] - dx * e2z[k];
@@ -105,14 +104,7 @@ private:
             const T qz = sx * e1y[k] - sy * e1x[k];
             const T v = (dx * qx + dy * qy + dz * qz) * inv;              // MT: v = Rd·Q / det
             const T tt = (e2x[k] * qx + e2y[k] * qy + e2z[k] * qz) * inv; // MT: t = E2·Q / det
-            // t above the rounding of E2·Q, as intersect_moller_trumbore: an origin on the plane to
-            // rounding (a restarted ray) does not hit.
-            const T ax = std::fabs(sx), ay = std::fabs(sy), az = std::fabs(sz);
-            const T bx = std::fabs(e1x[k]), by = std::fabs(e1y[k]), bz = std::fabs(e1z[k]);
-            const T tt_error = gamma9 * std::fabs(inv) *
-                               (std::fabs(e2x[k]) * (ay * bz + az * by) + std::fabs(e2y[k]) * (az * bx + ax * bz) +
-                                std::fabs(e2z[k]) * (ax * by + ay * bx));
-            const bool hit = (u >= T(0)) & (v >= T(0)) & (u + v <= T(1)) & (tt > tt_error) & (tt < t_max);
+            const bool hit = (u >= T(0)) & (v >= T(0)) & (u + v <= T(1)) & (tt > T(0)) & (tt < t_max);
             t_out[k] = hit ? tt : inf;
             u_out[k] = u;
             v_out[k] = v;

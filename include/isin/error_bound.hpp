@@ -5,6 +5,8 @@
 ///     const isin::BoundedPoint<float> p = isin::hit_point(ray, tri, hit); // p.point ± p.error
 ///     isin::Ray<float> shadow{isin::offset_ray_origin(p, N, to_light), to_light}; // offset.hpp
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <type_traits>
 
@@ -20,6 +22,27 @@ template <class T>
     static_assert(std::is_floating_point_v<T>, "isin::rounding_gamma needs a floating-point type");
     constexpr T u = std::numeric_limits<T>::epsilon() / T(2);
     return T(n) * u / (T(1) - T(n) * u);
+}
+
+/// The next representable value above v (below v with `down`), as pbrt-v4's NextFloatUp/Down: by
+/// the bits, a few instructions where std::nextafter is a library call; −0 and +0 step alike;
+/// infinities and NaN come back unchanged.
+template <class T>
+[[nodiscard]] inline T next_float(T v, bool down = false) noexcept {
+    static_assert(std::is_floating_point_v<T>, "isin::next_float needs a floating-point type");
+    using Bits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
+    static_assert(sizeof(Bits) == sizeof(T) && std::numeric_limits<T>::is_iec559, "IEEE 754 float or double");
+    if (!(std::fabs(v) < std::numeric_limits<T>::infinity())) return v;
+    if (v == T(0)) v = down ? T(-0.0) : T(0.0);
+    Bits bits;
+    std::memcpy(&bits, &v, sizeof v);
+    // Away from zero the magnitude's bits grow by one, towards zero they shrink by one.
+    if ((v > T(0) || (v == T(0) && !down)) != down)
+        ++bits;
+    else
+        --bits;
+    std::memcpy(&v, &bits, sizeof v);
+    return v;
 }
 
 /// A point computed in floating point, and a bound on its error: the exact point it stands for lies

@@ -1,8 +1,12 @@
 #pragma once
 /// isin — robust starting points for secondary rays (shadow, reflection, refraction rays).
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
+#include <type_traits>
 
+#include "detail/attributes.hpp"
 #include "error_bound.hpp"
 #include "ray.hpp"
 #include "vec.hpp"
@@ -28,6 +32,24 @@ template <class T>
     return p + (T(256) * eps * magnitude) * n;
 }
 
+namespace detail {
+/// c one ulp further in the direction of `towards`'s sign (c unchanged when towards is 0): the
+/// magnitude's bits grow by one where c and towards share a sign, shrink by one where not. Branch
+/// free; c must be finite (offset_ray_origin checks its input, and c = p + offset stays finite
+/// unless p is within an offset of the largest T, where the step gives ±∞).
+template <class T>
+[[nodiscard]] ISIN_DETAIL_INLINE T step_away(T c, T towards) noexcept {
+    using Bits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
+    if (c == T(0)) c = std::copysign(T(0), towards); // ±0 steps to ±denorm_min
+    Bits bits;
+    std::memcpy(&bits, &c, sizeof c);
+    const Bits step = towards != T(0) ? Bits(1) : Bits(0);
+    bits = std::signbit(c) == std::signbit(towards) ? bits + step : bits - step;
+    std::memcpy(&c, &bits, sizeof c);
+    return c;
+}
+} // namespace detail
+
 /// Where a secondary ray leaving a surface point p (with its error bound) in direction w starts:
 /// p moved along the unit geometric normal n, to the side w points to, by d = |n|·error — the
 /// distance from p to the plane through the farthest corner of p's error box — then each moved
@@ -35,18 +57,15 @@ template <class T>
 /// surface point lies in the box, so the origin is strictly on w's side of the surface, by as little
 /// as rounding allows. Returns p.point when p, its error or n is not finite.
 template <class T>
-[[nodiscard]] inline Vertex<T> offset_ray_origin(const BoundedPoint<T>& p, const Vertex<T>& n,
-                                                 const Vertex<T>& w) noexcept {
-    if (!is_finite(p.point) || !is_finite(p.error) || !is_finite(n)) return p.point;
-    const T d = dot(abs(n), p.error);       // pbrt-v4: d = |n|·δp
-    Vertex<T> offset = d * n;               // pbrt-v4: offset along the normal …
-    if (dot(w, n) < T(0)) offset = -offset; // … to w's side
-    Vertex<T> po = p.point + offset;
-    constexpr T inf = std::numeric_limits<T>::infinity();
-    const auto away = [](T c, T off) {
-        return off > T(0) ? std::nextafter(c, inf) : off < T(0) ? std::nextafter(c, -inf) : c;
-    };
-    return {away(po.x, offset.x), away(po.y, offset.y), away(po.z, offset.z)}; // pbrt-v4: round away from p
+[[nodiscard]] ISIN_DETAIL_INLINE Vertex<T> offset_ray_origin(const BoundedPoint<T>& p, const Vertex<T>& n,
+                                                             const Vertex<T>& w) noexcept {
+    const T d = dot(abs(n), p.error);                         // pbrt-v4: d = |n|·δp
+    const Vertex<T> offset = (dot(w, n) < T(0) ? -d : d) * n; // pbrt-v4: along n, to w's side
+    const Vertex<T> po = p.point + offset;
+    // Anything not finite in p, its error or n leaves po not finite (or NaN): p comes back.
+    if (!(std::fabs(po.x) + std::fabs(po.y) + std::fabs(po.z) < std::numeric_limits<T>::infinity())) return p.point;
+    // pbrt-v4: each moved coordinate one ulp further from p (the sum may have rounded towards it).
+    return {detail::step_away(po.x, offset.x), detail::step_away(po.y, offset.y), detail::step_away(po.z, offset.z)};
 }
 
 /// A secondary ray from surface point p (unit geometric normal n) in direction w, starting at

@@ -67,14 +67,6 @@ template <class T>
 }
 
 namespace detail {
-/// |a| ⊗ |b|: the cross product's terms in absolute value, (|a.y·b.z| + |a.z·b.y|, …), which bound
-/// the rounding of a × b and of the products built on it.
-template <class T>
-[[nodiscard]] inline Vertex<T> abs_cross(const Vertex<T>& a, const Vertex<T>& b) noexcept {
-    const Vertex<T> x = abs(a), y = abs(b);
-    return {x.y * y.z + x.z * y.y, x.z * y.x + x.x * y.z, x.x * y.y + x.y * y.x};
-}
-
 /// True when the edges e1, e2 span no area: |e1 × e2| lies within the rounding noise of the cross
 /// product (sin of the angle between the edges below ~8ε). Scale-free, overflow-free in max norm.
 template <class T>
@@ -83,11 +75,10 @@ template <class T>
     return !(max_abs(N) > T(8) * eps * max_abs(e1) * max_abs(e2)); // NaN → degenerate
 }
 
-/// Shared body of both area tests; `tolerance(S, R, e1, e2, ray)` gives the allowed |S − (s1+s2+s3)|;
-/// `conservative` rejects origins on the plane to rounding (isin's default, not the note's).
+/// Shared body of both area tests; `tolerance(S, R, e1, e2, ray)` gives the allowed |S − (s1+s2+s3)|.
 template <class T, class Tolerance>
-[[nodiscard]] inline Hit<T> intersect_area_with(const Ray<T>& ray, const Triangle<T>& tri, Tolerance tolerance,
-                                                bool conservative) noexcept {
+[[nodiscard]] inline Hit<T> intersect_area_with(const Ray<T>& ray, const Triangle<T>& tri,
+                                                Tolerance tolerance) noexcept {
     const Vertex<T> e1 = tri.v1 - tri.v0;
     const Vertex<T> e2 = tri.v2 - tri.v0;
     const Vertex<T> N = cross(e1, e2); // §4: (A,B,C) = N
@@ -95,12 +86,7 @@ template <class T, class Tolerance>
     const T D = isin::plane_offset(N, tri.v0);
     const T t = isin::ray_plane_t(ray, N, D);
     if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss(); // §4: t ≤ 0 → behind
-    // N·Ro + D within its rounding (γ₉·|N|·(|Ro| + |V0|)): the origin lies on the plane to rounding, as
-    // a ray restarted from this surface does — no hit (a conservative t > 0, as pbrt-v4 §6.8.7).
-    if (conservative &&
-        !(std::fabs(dot(N, ray.origin) + D) > rounding_gamma<T>(9) * dot(abs(N), abs(ray.origin) + abs(tri.v0))))
-        return Hit<T>::miss();
-    const Vertex<T> R = ray.at(t); // §3: R = Ro + t·Rd
+    const Vertex<T> R = ray.at(t);                                                       // §3: R = Ro + t·Rd
     const AreaTerms<T> a = isin::area_terms(tri, e1, e2, N, R);
     if (!(std::fabs(a.S - (a.s1 + a.s2 + a.s3)) <= tolerance(a.S, R, e1, e2, ray))) // §4: |S − Σs| ≤ ε
         return Hit<T>::miss();
@@ -115,8 +101,8 @@ template <class T, class Tolerance>
 template <class T>
 [[nodiscard]] inline Hit<T> intersect_area(const Ray<T>& ray, const Triangle<T>& tri, T epsilon) noexcept {
     return detail::intersect_area_with(
-        ray, tri, [epsilon](T, const Vertex<T>&, const Vertex<T>&, const Vertex<T>&, const Ray<T>&) { return epsilon; },
-        false);
+        ray, tri,
+        [epsilon](T, const Vertex<T>&, const Vertex<T>&, const Vertex<T>&, const Ray<T>&) { return epsilon; });
 }
 
 /// Area test of note §4, isin's default: the same formulas, two departures for accuracy.
@@ -130,14 +116,12 @@ template <class T>
     const Ray<T> local{ray.origin - tri.v0, ray.direction};
     const Triangle<T> local_tri{{T(0), T(0), T(0)}, tri.v1 - tri.v0, tri.v2 - tri.v0};
     return detail::intersect_area_with(
-        local, local_tri,
-        [](T S, const Vertex<T>& R, const Vertex<T>& e1, const Vertex<T>& e2, const Ray<T>& r) {
+        local, local_tri, [](T S, const Vertex<T>& R, const Vertex<T>& e1, const Vertex<T>& e2, const Ray<T>& r) {
             constexpr T eps = std::numeric_limits<T>::epsilon();
             const T L = max_of(max_abs(e1), max_abs(e2));
             const T M = max_of(max_abs(R), max_abs(r.origin));
             return T(8) * eps * (S + L * M);
-        },
-        true);
+        });
 }
 
 /// Möller–Trumbore ray–triangle test (Möller & Trumbore 1997; note §10) with barycentrics u, v:
@@ -162,10 +146,7 @@ template <class T>
     const T V = dot(ray.direction, q) * sign; // MT: v = Rd·Q / det
     if (!(V >= T(0) && U + V <= abs_det)) return Hit<T>::miss();
     const T tt = dot(e2, q) * sign; // MT: t = E2·Q / det
-    // t ≈ 0 within the rounding of E2·Q (≤ γ₉·|E2|·(|S| ⊗ |E1|), each factor and product rounded):
-    // the origin lies on the plane to rounding, as a ray restarted from this surface does — no hit
-    // (pbrt-v4 §6.8.7's conservative t > 0, for MT); on the hit path only.
-    if (!(tt > rounding_gamma<T>(9) * dot(abs(e2), detail::abs_cross(s, e1)))) return Hit<T>::miss();
+    if (!(tt > T(0))) return Hit<T>::miss();
     const T inv_det = T(1) / abs_det;
     const T t = tt * inv_det;
     if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
@@ -198,29 +179,6 @@ struct WatertightShear {
     }
 };
 
-/// Whether a watertight hit's t lies clear of its rounding: t > δt, the bound pbrt-v4 (§6.8.7,
-/// "conservative ray–triangle t") derives for the sheared vertices (x, y, z: A, B, C in the ray's
-/// frame, z scaled), the edge functions U, V, W and det. A ray restarted from this surface — its
-/// origin on the plane to rounding — then does not hit it at t ≈ 0.
-template <class T>
-[[nodiscard]] inline bool t_clear_of_rounding(const T (&x)[3], const T (&y)[3], const T (&z)[3], T U, T V, T W, T det,
-                                              T t, T shear_x, T shear_y) noexcept {
-    const auto max3 = [](const T(&a)[3]) { return max_of(std::fabs(a[0]), max_of(std::fabs(a[1]), std::fabs(a[2]))); };
-    const T max_x = max3(x), max_y = max3(y), max_z = max3(z);
-    const T delta_z = rounding_gamma<T>(3) * max_z; // pbrt-v4: δz = γ₃·max|z|
-    // x = A[kx] − Sx·A[kz] = A[kx] − d[kx]·z: pbrt-v4 bounds |d[kx]| by 1 (δx = γ₅·(max|x| + max|z|));
-    // with the factor kept, rays along an axis lose no precision to the z extent.
-    const T delta_x = rounding_gamma<T>(5) * (max_x + shear_x * max_z); // δx = γ₅·(max|x| + |dx/dz|·max|z|)
-    const T delta_y = rounding_gamma<T>(5) * (max_y + shear_y * max_z); // δy = γ₅·(max|y| + |dy/dz|·max|z|)
-    const T delta_e = T(2) * (rounding_gamma<T>(2) * max_x * max_y + delta_y * max_x + delta_x * max_y); // δe
-    const T max_e = max_of(std::fabs(U), max_of(std::fabs(V), std::fabs(W)));
-    const T delta_t =
-        T(3) * (rounding_gamma<T>(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / std::fabs(det);
-    // Beyond ~√max (float: 1.8e19) the bound's products overflow: then only t > 0, as before.
-    if (!(delta_t < std::numeric_limits<T>::infinity())) return t > T(0);
-    return t > delta_t;
-}
-
 /// The watertight test's per-triangle part (WBW §3) for vertices A, B, C relative to the ray's
 /// origin; the caller rejects degenerate triangles (intersect_watertight on the hit path only,
 /// Bvh at build time).
@@ -245,9 +203,6 @@ template <class T>
     const T inv_det = T(1) / det;
     const T t = t_scaled * inv_det;
     if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
-    if (!t_clear_of_rounding({Ax, Bx, Cx}, {Ay, By, Cy}, {Az, Bz, Cz}, U, V, W, det, t, std::fabs(s.Sx / s.Sz),
-                             std::fabs(s.Sy / s.Sz)))
-        return Hit<T>::miss();
     return Hit<T>::at(t, V * inv_det, W * inv_det);
 }
 
@@ -274,16 +229,24 @@ template <class T>
 }
 
 /// The hit point of a triangle hit, rebuilt from its barycentrics: P = b0·V0 + b1·V1 + b2·V2 with
-/// b1 = u, b2 = v, b0 = 1 − u − v, and the bound γ₇·(|b0·V0| + |b1·V1| + |b2·V2|) on its distance
-/// from the triangle's plane (pbrt-v4 §6.8.5). Unlike Ro + t·Rd, whose error grows with |Ro| and
-/// t, this depends on the triangle alone. Every triangle test that gives u, v works (area test,
-/// Möller–Trumbore, watertight, a Bvh's hits with the caller's `triangles[hit.primitive]`); the
-/// ray is not used (it is there so that every primitive's hit_point reads alike).
+/// b1 = u, b2 = v, b0 = 1 − u − v (every triangle test that gives u, v: area test, Möller–Trumbore,
+/// watertight, a Bvh's hits with the caller's `triangles[hit.primitive]`; the ray is not used, it
+/// is there so that every primitive's hit_point reads alike). Unlike Ro + t·Rd, whose error grows
+/// with |Ro| and t, its bound depends on the triangle alone, per component the larger of
+/// - γ₇·(|b0·V0| + |b1·V1| + |b2·V2|): the point's own rounding (pbrt-v4 §6.8.5), and
+/// - γ₃₂·L³/|N|∞ (L the longest edge, N the §2 normal, in max norm): how far from the plane a
+///   triangle test, computing from a ray origin on the triangle, may place it. pbrt-v4 adds a
+///   conservative t > 0 to its test instead (§6.8.7), which here cost 20–40% of the Bvh's speed;
+///   the margin matters only where |P| is below the triangle's size (near the origin).
 template <class T>
 [[nodiscard]] inline BoundedPoint<T> hit_point(const Ray<T>&, const Triangle<T>& tri, const Hit<T>& hit) noexcept {
     const T b1 = hit.u, b2 = hit.v, b0 = T(1) - b1 - b2;
     const Vertex<T> p0 = b0 * tri.v0, p1 = b1 * tri.v1, p2 = b2 * tri.v2;
-    return {p0 + p1 + p2, rounding_gamma<T>(7) * (abs(p0) + abs(p1) + abs(p2))}; // pbrt-v4 §6.8.5: γ₇·Σ|bᵢ·Vᵢ|
+    const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+    const T L = max_of(max_of(max_abs(e1), max_abs(e2)), max_abs(tri.v2 - tri.v1));
+    const T test_margin = rounding_gamma<T>(32) * L * (L * L / max_abs(cross(e1, e2))); // γ₃₂·L³/|N|∞
+    const Vertex<T> own = rounding_gamma<T>(7) * (abs(p0) + abs(p1) + abs(p2)); // pbrt-v4 §6.8.5: γ₇·Σ|bᵢ·Vᵢ|
+    return {p0 + p1 + p2, {max_of(own.x, test_margin), max_of(own.y, test_margin), max_of(own.z, test_margin)}};
 }
 
 } // namespace isin

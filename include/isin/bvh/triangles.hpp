@@ -143,31 +143,17 @@ namespace detail {
 /// The watertight test of a block: the lanes hit with 0 < t < t_max (front faces only when
 /// `cull`), their t, u, v in `out` unless `store` is false (then `out` may or may not be written:
 /// a caller that wants to know only whether anything is hit). The ray must be ready().
-/// The vector forms leave out intersect_sheared's conservative t (t_clear_of_rounding): lanes they
-/// hit are checked again one by one (a few per ray), which drops hits at t ≈ 0 of rays restarted
-/// from the triangle's surface.
 template <bool cull, bool store = true, class T>
 [[nodiscard]] inline unsigned test_block(const TriangleBlock<T>& b, const TriangleRay<T>& r, T t_max,
                                          LaneHits<T>& out) noexcept {
-    unsigned lanes = 0;
 #if defined(ISIN_DETAIL_TRIANGLES_AVX2)
-    lanes = test_block_avx2<cull, store>(b, r, t_max, out);
+    return test_block_avx2<cull, store>(b, r, t_max, out);
 #else
 #if ISIN_VECTOR_EXTENSIONS
-    if constexpr (sizeof(T) == sizeof(float))
-        lanes = test_block_lanes<cull>(b, r, t_max, out);
-    else
+    if constexpr (sizeof(T) == sizeof(float)) return test_block_lanes<cull>(b, r, t_max, out);
 #endif
-        return test_block_scalar<cull>(b, r, t_max, out);
+    return test_block_scalar<cull>(b, r, t_max, out);
 #endif
-    for (unsigned rest = lanes; rest; rest &= rest - 1) {
-        const int k = lowest_bit(rest);
-        const Vertex<T> o{r.org[0], r.org[1], r.org[2]};
-        Vertex<T> p[3]; // the vertices relative to the origin
-        for (int v = 0; v < 3; ++v) p[v] = Vertex<T>{b.v[v][0][k], b.v[v][1][k], b.v[v][2][k]} - o;
-        if (!intersect_sheared(p[0], p[1], p[2], r.shear, cull)) lanes &= ~(1u << k);
-    }
-    return lanes;
 }
 
 /// The lane with the least t among `lanes` (≠ 0): the nearest hit; of equal t, the lowest
