@@ -162,9 +162,10 @@ namespace detail {
 /// V, W) is kept; S shears the ray onto +z.
 template <class T>
 struct WatertightShear {
-    // Not initialised here: a Bvh makes one per ray and sets it only if the ray reaches a leaf.
-    int kx, ky, kz;
-    T Sx, Sy, Sz;
+    // Set by set(); the defaults (the +z shear) only keep every path defined for the compiler's
+    // flow analysis (GCC 12 -O3 saw the Bvh's lazily sheared rays as maybe uninitialised).
+    int kx = 0, ky = 1, kz = 2;
+    T Sx = T(0), Sy = T(0), Sz = T(1);
 
     /// Sets the shear for direction d; false (and no shear) for a zero or NaN direction.
     bool set(const Vertex<T>& d) noexcept {
