@@ -16,8 +16,9 @@
 // surface), the reflected ray, and on the large sphere the refracted ray (index 1.5, inward: it
 // must hit the far side, about 1.5–2 r away). Each method works with the normal its pipeline has,
 // for the light's side, the directions and the side it offsets to: isin's methods the triangle's
-// geometric normal, or isin::normal_at(sphere, point) at their point (Ro + t·Rd for none and
-// fixed, hit_point's otherwise); pbrt-v4 its object-space normal pHit/r.
+// geometric normal, or on spheres isin::normal_at(sphere, Ro + t·Rd) for none and fixed (the old
+// pipeline) and isin::normal_at(ray, sphere, hit) otherwise (the renderer's); pbrt-v4 its
+// object-space normal pHit/r.
 //
 // Offset methods (Offset):
 //   none            Ro + t·Rd, the raw hit point
