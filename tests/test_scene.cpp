@@ -380,3 +380,62 @@ TEST_CASE_TEMPLATE("scene stream: every kind, a Bvh kind, one placed mesh or sev
         CHECK(scene_stream_mismatches(scene, rays, &culled) == 0);
     }
 }
+
+TEST_CASE_TEMPLATE("scene: surface points carry error bounds that hold the exact surface (spheres, triangles, placed "
+                   "meshes far from the origin)",
+                   T, float, double) {
+    using L = long double;
+    using X = isin::Transform<T>;
+    const T far = T(2000);
+    const auto ico = workloads::icosphere<T>({0, 0, 0}, 2.0, 2);
+    isin::Scene<T, isin::Sphere, isin::Triangle> scene;
+    const auto m = scene.add_material({});
+    scene.add(isin::Sphere<T>{{far - 6, far, far}, 2}, m);
+    scene.add(isin::Triangle<T>{{far + 4, far - 3, far - 1}, {far + 4, far + 3, far - 1}, {far + 9, far - 3, far + 1}},
+              m);
+    const auto id = scene.add_mesh(ico, m);
+    const X place = X::translation({far, far + 6, far}) * X::rotation({1, 2, 3}, T(0.7)) * X::scaling({1, 2, T(0.5)});
+    scene.add_instance(id, place);
+    scene.commit();
+    const isin::Vertex<T> eye{far, far, far - 40};
+    std::mt19937_64 rng(3);
+    const auto uni = [&](double lo, double hi) { return T(lo + (hi - lo) * double(rng() >> 11) * 0x1p-53); };
+    // |n|·error ≥ the distance from the surface (n the unit normal there, in long double).
+    const auto within = [](const isin::Vertex<L>& n, L distance, const isin::Vertex<T>& e) {
+        return std::fabs(distance) <= std::fabs(n.x) * L(e.x) + std::fabs(n.y) * L(e.y) + std::fabs(n.z) * L(e.z);
+    };
+    const auto wide = [](const isin::Vertex<T>& a) { return isin::Vertex<L>{L(a.x), L(a.y), L(a.z)}; };
+    int kinds[3] = {0, 0, 0}, outside = 0;
+    for (int i = 0; i < 3000; ++i) {
+        const isin::Ray<T> ray{eye, isin::Vertex<T>{uni(-12, 12), uni(-6, 12), T(40)}};
+        const auto h = scene.intersect(ray);
+        if (!h) continue;
+        const auto sp = scene.surface(ray, h);
+        if (h.geometry == 0) { // the sphere
+            const auto d = wide(sp.point) - isin::Vertex<L>{L(far - 6), L(far), L(far)};
+            outside += !within(isin::normalize(d), isin::length(d) - 2, sp.error);
+        } else {
+            isin::Triangle<T> tri{
+                {far + 4, far - 3, far - 1}, {far + 4, far + 3, far - 1}, {far + 9, far - 3, far + 1}};
+            isin::Vertex<L> v[3] = {wide(tri.v0), wide(tri.v1), wide(tri.v2)};
+            if (h.geometry != 1) { // the placed mesh: its triangle moved exactly
+                const auto& t = ico[h.primitive];
+                const isin::Vertex<T>* src[3] = {&t.v0, &t.v1, &t.v2};
+                for (int k = 0; k < 3; ++k) {
+                    L c[3];
+                    for (int r = 0; r < 3; ++r)
+                        c[r] = L(place.m[r][0]) * L(src[k]->x) + L(place.m[r][1]) * L(src[k]->y) +
+                               L(place.m[r][2]) * L(src[k]->z) + L(isin::component(place.d, r));
+                    v[k] = {c[0], c[1], c[2]};
+                }
+            }
+            const auto n = isin::normalize(isin::cross(v[1] - v[0], v[2] - v[0]));
+            outside += !within(n, isin::dot(n, wide(sp.point) - v[0]), sp.error);
+        }
+        ++kinds[std::min<std::uint32_t>(h.geometry, 2)];
+    }
+    CHECK(kinds[0] > 100);
+    CHECK(kinds[1] > 100);
+    CHECK(kinds[2] > 100);
+    CHECK(outside == 0);
+}

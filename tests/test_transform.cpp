@@ -6,6 +6,7 @@
 #include "approx.hpp"
 
 #include <cmath>
+#include <random>
 
 namespace {
 
@@ -47,4 +48,31 @@ TEST_CASE_TEMPLATE("Transform: the inverse undoes it; normals go by the inverse 
     CHECK(double(isin::dot(moved, m.vector(e2))) == approx(0.0).scale(1).epsilon(1e-4));
     // A flat transform has no inverse: every entry is then non-finite.
     CHECK_FALSE(std::isfinite(X::scaling({1, 0, 1}).inverse().m[0][0]));
+}
+
+TEST_CASE_TEMPLATE("bounded_point: the exact image of every point of the error box lies within the new bound", T, float,
+                   double) {
+    using L = long double;
+    std::mt19937_64 rng(42);
+    const auto uni = [&](double lo, double hi) { return lo + (hi - lo) * double(rng() >> 11) * 0x1p-53; };
+    int outside = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const auto place = isin::Transform<T>::translation({T(uni(-1e3, 1e3)), T(uni(-1e3, 1e3)), T(uni(-1e3, 1e3))}) *
+                           isin::Transform<T>::rotation({T(uni(-1, 1)), T(uni(-1, 1)), T(1)}, T(uni(0, 6))) *
+                           isin::Transform<T>::scaling({T(uni(0.1, 10)), T(uni(0.1, 10)), T(uni(-10, -0.1))});
+        const isin::BoundedPoint<T> p{{T(uni(-50, 50)), T(uni(-50, 50)), T(uni(-50, 50))},
+                                      {T(uni(0, 1e-3)), T(uni(0, 1e-3)), T(0)}};
+        const auto q = place.bounded_point(p);
+        // A corner of p's box, mapped exactly (long double from the transform's own entries).
+        for (int c = 0; c < 4; ++c) {
+            const L x[3] = {L(p.point.x) + ((c & 1) ? L(p.error.x) : -L(p.error.x)),
+                            L(p.point.y) + ((c & 2) ? L(p.error.y) : -L(p.error.y)), L(p.point.z)};
+            for (int r = 0; r < 3; ++r) {
+                const L exact = L(place.m[r][0]) * x[0] + L(place.m[r][1]) * x[1] + L(place.m[r][2]) * x[2] +
+                                L(isin::component(place.d, r));
+                outside += !(std::fabs(exact - L(isin::component(q.point, r))) <= L(isin::component(q.error, r)));
+            }
+        }
+    }
+    CHECK(outside == 0);
 }
