@@ -805,3 +805,31 @@ TEST_CASE_TEMPLATE("Bvh: one block per leaf holding that leaf's triangles; node 
     bvh.refit(tris);
     check_blocks(bvh);
 }
+
+TEST_CASE("BVH build: 1, 2 and 4 threads (work queue, binning in chunks) build the same tree") {
+    // Every split depends on its primitives alone, and merged bins are order-free (min, max,
+    // counts): threads change who builds a subtree, not the tree.
+    const auto tris = workloads::triangle_soup<float>(300000, 9);
+    isin::BvhOptions one;
+    one.threads = 1;
+    const isin::Bvh<float> reference{tris, one};
+    std::mt19937_64 rng(4);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (int threads : {2, 4}) {
+        CAPTURE(threads);
+        isin::BvhOptions many;
+        many.threads = threads;
+        const isin::Bvh<float> bvh{tris, many};
+        CHECK(bvh.node_count() == reference.node_count());
+        CHECK(bvh.depth() == reference.depth());
+        int differ = 0;
+        for (int r = 0; r < 2000; ++r) {
+            const isin::Ray<float> ray{
+                {float(uni(rng) * 15), float(uni(rng) * 15), -20.0f},
+                isin::normalize(isin::Vertex<float>{float(uni(rng) * 0.5), float(uni(rng) * 0.5), 1})};
+            const auto a = bvh.intersect(ray), b = reference.intersect(ray);
+            differ += a.t != b.t || a.primitive != b.primitive;
+        }
+        CHECK(differ == 0);
+    }
+}

@@ -9,9 +9,11 @@
 #include <atomic>
 #include <cmath>
 #include <cstddef>
+#include <condition_variable>
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -62,10 +64,14 @@ public:
         const int threads = thread_count(options.threads);
         // The primitives (box, centroid), in chunks; unusable boxes (empty, not finite) are
         // marked and then left out.
+        // The bounds of the boxes and of their centroids come from the same pass, chunk by chunk.
         Prims prims(n);
         std::atomic<bool> unusable{false};
+        Box4<T> box, centroids;
+        std::mutex merging;
         parallel_chunks(n, threads, parallel_min, [&](std::size_t begin, std::size_t end) {
             bool skipped = false;
+            Box4<T> chunk_box, chunk_centroids;
             for (std::size_t i = begin; i < end; ++i) {
                 const Box<T> b = box_of(i);
                 Prim& p = prims[i];
@@ -80,8 +86,11 @@ public:
                     p.centroid[a] = p.lo[a] * T(0.5) + p.hi[a] * T(0.5); // (lo + hi)/2 would overflow above max/2
                 }
                 p.lo[3] = p.hi[3] = p.centroid[3] = T(0);
+                chunk_box.grow(p.lo, p.hi), chunk_centroids.grow(p.centroid, p.centroid);
             }
             if (skipped) unusable = true;
+            const std::lock_guard<std::mutex> lock(merging);
+            box.grow(chunk_box), centroids.grow(chunk_centroids);
         });
         if (unusable)
             prims.erase(
@@ -89,13 +98,12 @@ public:
                 prims.end());
         if (prims.empty()) return std::move(tree_);
         leaf_size_ = std::clamp(options.leaf_size, 1, 8);
-        std::atomic<int> threads_left{threads - 1};
-        Box4<T> box, centroids;
-        for (const Prim& p : prims) box.grow(p.lo, p.hi), centroids.grow(p.centroid, p.centroid);
         const Box<T> root_box = box.box();
         tree_.bound_ = std::max(max_abs(root_box.lo), max_abs(root_box.hi));
-        auto root = build_binary(prims, 0, static_cast<std::uint32_t>(prims.size()), root_box, centroids.box(), 0,
-                                 threads_left);
+        auto root = std::make_unique<BinaryNode<T>>();
+        root->box = root_box, root->count = static_cast<std::uint32_t>(prims.size());
+        threads_ = threads;
+        build_binary(prims, {root.get(), centroids.box(), 0}, threads);
         tree_.nodes_.reserve(prims.size() / 4 + 1);
         plan(*root);
         if (root->becomes_leaf()) { // a single leaf: a root node with one child
@@ -111,10 +119,12 @@ public:
     }
 
 private:
-    // Parallel loops of the build take chunks of at least this many items, and a subtree gets
-    // a thread of its own from this many primitives on.
+    // Parallel loops of the build take chunks of at least this many items; the binary build's
+    // work queue holds subtrees from this many primitives on (smaller ones are built at once).
     static constexpr std::size_t parallel_min = 32768;
-    static constexpr std::uint32_t subtree_thread_min = 65536;
+    static constexpr std::uint32_t task_min = 4096;
+    // Nodes of this many primitives or more (the first levels) are binned on every thread.
+    static constexpr std::uint32_t parallel_bin_min = 131072;
     // The binary build splits by SAH down to this depth, and at the median below it, so the tree
     // is at most sah_depth + 32 levels deep for any input (the traversal stack is sized by it).
     static constexpr int sah_depth = BvhTree<T>::depth_limit - 32;
@@ -143,33 +153,70 @@ private:
         }
     };
 
-    // Binary SAH build of prims[first, first + count), whose box and centroid bounds the caller
-    // knows. One pass bins the centroids on all three axes; the sweep gives the children's boxes
+    struct Bin {
+        Box4<T> box, centroids;
+        std::uint32_t n = 0;
+    };
+    struct Bins {
+        Bin at[3][bins];
+        void merge(const Bins& o) noexcept {
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < bins; ++b) {
+                    Bin& x = at[a][b];
+                    const Bin& y = o.at[a][b];
+                    if (!y.n) continue;
+                    x.box.grow(y.box.lo, y.box.hi), x.centroids.grow(y.centroids.lo, y.centroids.hi), x.n += y.n;
+                }
+        }
+    };
+
+    // A node of the binary build still to split: its box, first and count are set; the bounds
+    // of its primitives' centroids, and its depth.
+    struct Pending {
+        BinaryNode<T>* node;
+        Box<T> centroids;
+        int depth;
+    };
+
+    // Binary SAH split of node prims[first, first + count), whose box and centroid bounds the
+    // caller knows: into two children (true; `left` and `right` then name them) or none (a
+    // leaf). One pass bins the centroids on all three axes; the sweep gives the children's boxes
     // and centroid bounds, so no level re-reads its primitives for them. Below sah_depth, or when
     // no axis can be binned (all centroids within rounding of each other), it splits at the
     // median of the widest axis, which bounds the depth (and so the traversal stack) for any input.
-    std::unique_ptr<BinaryNode<T>> build_binary(Prims& prims, std::uint32_t first, std::uint32_t count,
-                                                const Box<T>& box, const Box<T>& centroids, int depth,
-                                                std::atomic<int>& threads_left) {
-        auto node = std::make_unique<BinaryNode<T>>();
-        node->box = box, node->first = first, node->count = count;
-        if (count <= 2 && count <= std::uint32_t(leaf_size_)) return node;
+    bool split(Prims& prims, const Pending& at, Pending& left, Pending& right) {
+        BinaryNode<T>* const node = at.node;
+        const std::uint32_t first = node->first, count = node->count;
+        const Box<T>& box = node->box;
+        const Box<T>& centroids = at.centroids;
+        const int depth = at.depth;
+        if (count <= 2 && count <= std::uint32_t(leaf_size_)) return false;
 
-        struct Bin {
-            Box4<T> box, centroids;
-            std::uint32_t n = 0;
-        };
-        Bin bin[3][bins];
+        Bins bin;
         const Binning binning(centroids);
         const bool binned = depth < sah_depth && binning.any();
-        if (binned)
-            for (std::uint32_t i = first; i < first + count; ++i) {
+        const auto bin_range = [&](std::uint32_t begin, std::uint32_t end, Bins& into) {
+            for (std::uint32_t i = begin; i < end; ++i) {
                 const Prim& p = prims[i];
                 for (int a = 0; a < 3; ++a) {
-                    Bin& b = bin[a][binning.bin(p, a)];
+                    Bin& b = into.at[a][binning.bin(p, a)];
                     b.box.grow(p.lo, p.hi), b.centroids.grow(p.centroid, p.centroid), ++b.n;
                 }
             }
+        };
+        if (binned && threads_ > 1 && count >= parallel_bin_min) {
+            // The first splits, before the queue has work for every thread: binned in chunks
+            // on all threads, the chunks' bins merged.
+            std::mutex merging;
+            parallel_chunks(count, threads_, parallel_min, [&](std::size_t begin, std::size_t end) {
+                Bins part;
+                bin_range(first + std::uint32_t(begin), first + std::uint32_t(end), part);
+                const std::lock_guard<std::mutex> lock(merging);
+                bin.merge(part);
+            });
+        } else if (binned) {
+            bin_range(first, first + count, bin);
+        }
         // Sweep: cost = Σ area · count over the two sides.
         T best_cost = std::numeric_limits<T>::infinity(), best_areas = best_cost;
         int best_axis = -1, best_split = 0;
@@ -180,10 +227,11 @@ private:
             Box<T> acc;
             std::uint32_t acc_n = 0;
             for (int b = bins - 1; b > 0; --b)
-                acc.grow(bin[a][b].box.box()), acc_n += bin[a][b].n, right_area[b] = acc.area(), right_n[b] = acc_n;
+                acc.grow(bin.at[a][b].box.box()), acc_n += bin.at[a][b].n, right_area[b] = acc.area(),
+                                                                           right_n[b] = acc_n;
             acc = {}, acc_n = 0;
             for (int b = 0; b < bins - 1; ++b) {
-                acc.grow(bin[a][b].box.box()), acc_n += bin[a][b].n;
+                acc.grow(bin.at[a][b].box.box()), acc_n += bin.at[a][b].n;
                 if (acc_n == 0 || right_n[b + 1] == 0) continue;
                 const T cost = acc.area() * T(acc_n) + right_area[b + 1] * T(right_n[b + 1]);
                 if (cost < best_cost)
@@ -195,7 +243,7 @@ private:
         // ratio measured on the vs_embree meshes: 0.5 to 0.7 trace alike, 1.0 builds 40% longer
         // for no gain, per-triangle SAH costs likewise).
         constexpr T split_area_ratio = T(0.6);
-        if (count <= std::uint32_t(leaf_size_) && !(best_areas < split_area_ratio * box.area())) return node;
+        if (count <= std::uint32_t(leaf_size_) && !(best_areas < split_area_ratio * box.area())) return false;
 
         std::uint32_t mid = first;
         Box<T> left_box, right_box, left_centroids, right_centroids;
@@ -204,7 +252,7 @@ private:
             for (int b = 0; b < bins; ++b) {
                 Box<T>& side = b <= best_split ? left_box : right_box;
                 Box<T>& side_c = b <= best_split ? left_centroids : right_centroids;
-                if (bin[a][b].n) side.grow(bin[a][b].box.box()), side_c.grow(bin[a][b].centroids.box());
+                if (bin.at[a][b].n) side.grow(bin.at[a][b].box.box()), side_c.grow(bin.at[a][b].centroids.box());
             }
             const auto middle =
                 std::partition(prims.begin() + first, prims.begin() + first + count, [&](const Prim& p) {
@@ -226,22 +274,63 @@ private:
             left_box = lb.box(), left_centroids = lc.box(), right_box = rb.box(), right_centroids = rc.box();
         }
 
-        const std::uint32_t left_count = mid - first, right_count = count - left_count;
-        const auto build_left = [&] {
-            node->left = build_binary(prims, first, left_count, left_box, left_centroids, depth + 1, threads_left);
-        };
-        const auto build_right = [&] {
-            node->right = build_binary(prims, mid, right_count, right_box, right_centroids, depth + 1, threads_left);
-        };
-        if (count >= subtree_thread_min && threads_left.fetch_sub(1) > 0) { // a large subtree on its own thread
-            fork_join(build_left, build_right);
-            threads_left.fetch_add(1);
-        } else {
-            if (count >= subtree_thread_min) threads_left.fetch_add(1); // undo the failed claim
-            build_left();
-            build_right();
-        }
-        return node;
+        node->left = std::make_unique<BinaryNode<T>>();
+        node->right = std::make_unique<BinaryNode<T>>();
+        node->left->box = left_box, node->left->first = first, node->left->count = mid - first;
+        node->right->box = right_box, node->right->first = mid, node->right->count = first + count - mid;
+        left = {node->left.get(), left_centroids, depth + 1};
+        right = {node->right.get(), right_centroids, depth + 1};
+        return true;
+    }
+
+    // The binary tree below `at`, on this thread.
+    void build_subtree(Prims& prims, const Pending& at) {
+        Pending left, right;
+        if (!split(prims, at, left, right)) return;
+        build_subtree(prims, left);
+        build_subtree(prims, right);
+    }
+
+    // The binary tree below `root` on up to `threads` threads: subtrees of task_min primitives
+    // or more wait in a shared queue (last in, first out: depth first), any idle thread takes the
+    // next, so both cores stay busy however unevenly SAH splits; smaller ones are built at once.
+    // Threads that cannot start leave their share to the others (run_workers); an exception in
+    // one (no memory) stops the others and reaches the caller.
+    void build_binary(Prims& prims, const Pending& root, int threads) {
+        if (threads <= 1 || root.node->count < 2 * task_min) return build_subtree(prims, root);
+        std::mutex mutex;
+        std::condition_variable changed;
+        std::vector<Pending> queue{root};
+        int working = 0;     // threads splitting or building a subtree taken from the queue
+        bool failed = false; // a thread threw: the others stop
+        run_workers(threads, [&](int, const FirstError&) {
+            std::unique_lock<std::mutex> lock(mutex);
+            for (;;) {
+                changed.wait(lock, [&] { return !queue.empty() || working == 0 || failed; });
+                if (queue.empty() || failed) return changed.notify_all(); // all done (or stopped)
+                const Pending at = queue.back();
+                queue.pop_back();
+                ++working;
+                lock.unlock();
+                Pending left, right;
+                bool has_children = false;
+                try {
+                    if (at.node->count >= task_min)
+                        has_children = split(prims, at, left, right);
+                    else
+                        build_subtree(prims, at);
+                } catch (...) {
+                    lock.lock();
+                    --working, failed = true;
+                    changed.notify_all();
+                    throw; // run_workers records it for the caller
+                }
+                lock.lock();
+                --working;
+                if (has_children) queue.push_back(right), queue.push_back(left);
+                changed.notify_all();
+            }
+        });
     }
 
     static void clear(Node& n) noexcept {
@@ -321,6 +410,7 @@ private:
 
     BvhTree<T> tree_;
     int leaf_size_ = 8;
+    int threads_ = 1;
     // SAH costs per unit of box area of visiting an 8-wide node and of testing a leaf.
     static constexpr T node_cost = T(1), leaf_cost = T(1);
 };
