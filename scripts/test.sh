@@ -9,7 +9,7 @@
 #     AddressSanitizer and UndefinedBehaviorSanitizer, clang++ with ThreadSanitizer;
 #  4. compiles the benchmarks (against Embree: libembree-dev; load_models against assimp:
 #     libassimp-dev), warnings as errors, without running them;
-#  5. fuzzes the file readers (scripts/fuzz.sh, ISIN_FUZZ_SECONDS per target, default 45; 0
+#  5. fuzzes the file readers (scripts/fuzz.sh, ISIN_FUZZ_SECONDS per target, default 30; 0
 #     skips it).
 # set -e stops at the first step that fails.
 set -euo pipefail
@@ -46,7 +46,7 @@ echo "== isin: benchmarks compile (not run)" >&2
 cmake -S . -B build/ci-benchmarks -DCMAKE_CXX_COMPILER=g++ -DCMAKE_BUILD_TYPE=Release -DISIN_WERROR=ON \
   -DISIN_BUILD_BENCHMARKS=ON -DISIN_BUILD_TESTS=OFF -DISIN_BUILD_EXAMPLES=OFF >/dev/null
 cmake --build build/ci-benchmarks -j"$jobs"
-fuzz_seconds=${ISIN_FUZZ_SECONDS:-45}
+fuzz_seconds=${ISIN_FUZZ_SECONDS:-30}
 if [ "$fuzz_seconds" != 0 ]; then
   bash scripts/fuzz.sh "$fuzz_seconds"
 fi
