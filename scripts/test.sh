@@ -9,7 +9,7 @@
 #     AddressSanitizer and UndefinedBehaviorSanitizer, clang++ with ThreadSanitizer;
 #  4. compiles the benchmarks (against Embree: libembree-dev; load_models against assimp:
 #     libassimp-dev), warnings as errors, without running them;
-#  5. fuzzes the file readers (scripts/fuzz.sh, ISIN_FUZZ_SECONDS per target, default 30; 0
+#  5. fuzzes the file readers (scripts/fuzz.sh, ISIN_FUZZ_SECONDS per target (at most), default 30; 0
 #     skips it).
 # set -e stops at the first step that fails.
 set -euo pipefail
