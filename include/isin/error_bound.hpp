@@ -10,6 +10,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "detail/attributes.hpp"
 #include "vec.hpp"
 
 namespace isin {
@@ -24,25 +25,32 @@ template <class T>
     return T(n) * u / (T(1) - T(n) * u);
 }
 
+namespace detail {
+/// c one ulp further in the direction of `towards`'s sign (c unchanged when towards is 0): the
+/// magnitude's bits grow by one where c and towards share a sign, shrink by one where not. Branch
+/// free; c must be finite (offset_ray_origin checks its input, and c = p + offset stays finite
+/// unless p is within an offset of the largest T, where the step gives ±∞).
+template <class T>
+[[nodiscard]] ISIN_DETAIL_INLINE T step_away(T c, T towards) noexcept {
+    using Bits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
+    if (c == T(0)) c = std::copysign(T(0), towards); // ±0 steps to ±denorm_min
+    Bits bits;
+    std::memcpy(&bits, &c, sizeof c);
+    const Bits step = towards != T(0) ? Bits(1) : Bits(0);
+    bits = std::signbit(c) == std::signbit(towards) ? bits + step : bits - step;
+    std::memcpy(&c, &bits, sizeof c);
+    return c;
+}
+} // namespace detail
+
 /// The next representable value above v (below v with `down`), as pbrt-v4's NextFloatUp/Down: by
-/// the bits, a few instructions where std::nextafter is a library call; −0 and +0 step alike;
-/// infinities and NaN come back unchanged.
+/// the bits (detail::step_away), a few instructions where std::nextafter is a library call; −0 and
+/// +0 step alike; infinities and NaN come back unchanged.
 template <class T>
 [[nodiscard]] inline T next_float(T v, bool down = false) noexcept {
-    static_assert(std::is_floating_point_v<T>, "isin::next_float needs a floating-point type");
-    using Bits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
-    static_assert(sizeof(Bits) == sizeof(T) && std::numeric_limits<T>::is_iec559, "IEEE 754 float or double");
+    static_assert(std::numeric_limits<T>::is_iec559, "IEEE 754 float or double");
     if (!(std::fabs(v) < std::numeric_limits<T>::infinity())) return v;
-    if (v == T(0)) v = down ? T(-0.0) : T(0.0);
-    Bits bits;
-    std::memcpy(&bits, &v, sizeof v);
-    // Away from zero the magnitude's bits grow by one, towards zero they shrink by one.
-    if ((v > T(0) || (v == T(0) && !down)) != down)
-        ++bits;
-    else
-        --bits;
-    std::memcpy(&v, &bits, sizeof v);
-    return v;
+    return detail::step_away(v, down ? T(-1) : T(1));
 }
 
 /// A point computed in floating point, and a bound on its error: the exact point it stands for lies

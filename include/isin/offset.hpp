@@ -1,10 +1,7 @@
 #pragma once
 /// isin — robust starting points for secondary rays (shadow, reflection, refraction rays).
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <limits>
-#include <type_traits>
 
 #include "detail/attributes.hpp"
 #include "error_bound.hpp"
@@ -31,24 +28,6 @@ template <class T>
     const T magnitude = max_of(max_of(max_abs(p), scale), T(1) / T(32));
     return p + (T(256) * eps * magnitude) * n;
 }
-
-namespace detail {
-/// c one ulp further in the direction of `towards`'s sign (c unchanged when towards is 0): the
-/// magnitude's bits grow by one where c and towards share a sign, shrink by one where not. Branch
-/// free; c must be finite (offset_ray_origin checks its input, and c = p + offset stays finite
-/// unless p is within an offset of the largest T, where the step gives ±∞).
-template <class T>
-[[nodiscard]] ISIN_DETAIL_INLINE T step_away(T c, T towards) noexcept {
-    using Bits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
-    if (c == T(0)) c = std::copysign(T(0), towards); // ±0 steps to ±denorm_min
-    Bits bits;
-    std::memcpy(&bits, &c, sizeof c);
-    const Bits step = towards != T(0) ? Bits(1) : Bits(0);
-    bits = std::signbit(c) == std::signbit(towards) ? bits + step : bits - step;
-    std::memcpy(&c, &bits, sizeof c);
-    return c;
-}
-} // namespace detail
 
 /// Where a secondary ray leaving a surface point p (with its error bound) in direction w starts:
 /// p moved along the unit geometric normal n, to the side w points to, by d = |n|·error — the

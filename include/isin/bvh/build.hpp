@@ -103,7 +103,7 @@ public:
         auto root = std::make_unique<BinaryNode<T>>();
         root->box = root_box, root->count = static_cast<std::uint32_t>(prims.size());
         threads_ = threads;
-        build_binary(prims, {root.get(), centroids.box(), 0}, threads);
+        build_binary(prims, {root.get(), centroids.box(), 0});
         tree_.nodes_.reserve(prims.size() / 4 + 1);
         plan(*root);
         if (root->becomes_leaf()) { // a single leaf: a root node with one child
@@ -291,19 +291,19 @@ private:
         build_subtree(prims, right);
     }
 
-    // The binary tree below `root` on up to `threads` threads: subtrees of task_min primitives
+    // The binary tree below `root` on up to threads_ threads: subtrees of task_min primitives
     // or more wait in a shared queue (last in, first out: depth first), any idle thread takes the
     // next, so both cores stay busy however unevenly SAH splits; smaller ones are built at once.
     // Threads that cannot start leave their share to the others (run_workers); an exception in
     // one (no memory) stops the others and reaches the caller.
-    void build_binary(Prims& prims, const Pending& root, int threads) {
-        if (threads <= 1 || root.node->count < 2 * task_min) return build_subtree(prims, root);
+    void build_binary(Prims& prims, const Pending& root) {
+        if (threads_ <= 1 || root.node->count < 2 * task_min) return build_subtree(prims, root);
         std::mutex mutex;
         std::condition_variable changed;
         std::vector<Pending> queue{root};
         int working = 0;     // threads splitting or building a subtree taken from the queue
         bool failed = false; // a thread threw: the others stop
-        run_workers(threads, [&](int, const FirstError&) {
+        run_workers(threads_, [&](int, const FirstError&) {
             std::unique_lock<std::mutex> lock(mutex);
             for (;;) {
                 changed.wait(lock, [&] { return !queue.empty() || working == 0 || failed; });
