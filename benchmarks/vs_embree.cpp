@@ -15,10 +15,12 @@
 //
 // Build times: Embree sizes its thread pool once per process (a later device with threads=1
 // still builds on every core), so each build time is measured in a fresh child process: this
-// program re-executes itself with `--build-only --mesh M --threads N`, which builds isin
-// (BvhOptions::threads = N) and Embree (a device made with "threads=N") once untimed, then
-// --repeats times each, interleaved, and prints the medians and the CPU-time/wall-time ratio
-// of each build (≈ 1.0 shows a build really ran on one thread).
+// program re-executes itself with `--build-only --mesh M --threads N --library L`, which builds
+// isin (BvhOptions::threads = N) or Embree (a device made with "threads=N") once untimed, then
+// --repeats times, and prints the median and the CPU-time/wall-time ratio of the builds (≈ 1.0
+// shows a build really ran on one thread). Each library builds alone in its own process (a
+// build's memory, freed or kept by the allocator, would change the other's page faults);
+// `--library both` interleaves the two in one process.
 //
 // Checks: primary hit count and Σt of isin, Embree-1 and Embree-16 must agree to 1e-5 relative,
 // and so must the number of occluded shadow rays; the program exits with status 1 otherwise.
@@ -74,7 +76,8 @@ struct Options {
     std::vector<std::string> studies = studies::names(); // after the meshes (embree_studies.hpp)
     bool build_only = false;                             // child mode: time the builds of one mesh with `build_threads`
     int build_threads = 1;
-    std::string self; // this program, re-executed for the build times
+    std::string build_library = "both"; // child mode: isin, embree or both
+    std::string self;                   // this program, re-executed for the build times
 };
 
 void set_fp_mode() { // Embree's recommendation for every thread that calls it
@@ -552,15 +555,17 @@ int build_only(const Options& opt) {
     bo.threads = opt.build_threads;
     std::vector<double> isin_ms, embree_ms, isin_cpu, embree_cpu;
     std::size_t check = 0;
+    const bool isin = opt.build_library != "embree", embree = opt.build_library != "isin";
     for (int rep = -1; rep < opt.repeats; ++rep) { // rep −1: warm-up (Embree's thread pool, page faults)
         double c0 = cpu_seconds();
         auto t0 = Clock::now();
-        {
+        if (isin) {
             const isin::Bvh<float> bvh{tris, bo};
             const double s = since(t0), c = cpu_seconds() - c0;
             check += bvh.node_count();
             if (rep >= 0) isin_ms.push_back(1e3 * s), isin_cpu.push_back(c / s);
         }
+        if (!embree) continue;
         c0 = cpu_seconds();
         t0 = Clock::now();
         RTCScene scene = embree_scene::make(device, tris);
@@ -569,8 +574,9 @@ int build_only(const Options& opt) {
         rtcReleaseScene(scene);
     }
     rtcReleaseDevice(device);
-    std::printf("BUILD %.3f %.3f %.3f %.3f %zu\n", median(isin_ms), median(isin_cpu), median(embree_ms),
-                median(embree_cpu), check);
+    const auto or_none = [](const std::vector<double>& v) { return v.empty() ? not_measured : median(v); };
+    std::printf("BUILD %.3f %.3f %.3f %.3f %zu\n", or_none(isin_ms), or_none(isin_cpu), or_none(embree_ms),
+                or_none(embree_cpu), check);
     return 0;
 }
 
@@ -578,20 +584,29 @@ struct BuildTimes {
     double isin_ms = not_measured, isin_cpu = not_measured, embree_ms = not_measured, embree_cpu = not_measured;
 };
 
+// The build times of `mesh` on `threads` threads: each library in a child process of its own.
 BuildTimes child_build(const Options& opt, const std::string& mesh, int threads) {
-    const std::string command = "'" + opt.self + "' --build-only --mesh '" + mesh + "' --threads " +
-                                std::to_string(threads) + " --repeats " + std::to_string(opt.repeats);
     BuildTimes b;
-    FILE* pipe = popen(command.c_str(), "r");
-    if (!pipe) return b;
-    char line[512];
-    while (std::fgets(line, sizeof line, pipe)) {
-        unsigned long long check = 0;
-        if (std::sscanf(line, "BUILD %lf %lf %lf %lf %llu", &b.isin_ms, &b.isin_cpu, &b.embree_ms, &b.embree_cpu,
-                        &check) != 5)
-            std::fputs(line, stderr);
+    for (const char* library : {"isin", "embree"}) {
+        const std::string command = "'" + opt.self + "' --build-only --mesh '" + mesh + "' --threads " +
+                                    std::to_string(threads) + " --repeats " + std::to_string(opt.repeats) +
+                                    " --library " + library;
+        FILE* pipe = popen(command.c_str(), "r");
+        if (!pipe) return b;
+        char line[512];
+        BuildTimes child;
+        while (std::fgets(line, sizeof line, pipe)) {
+            unsigned long long check = 0;
+            if (std::sscanf(line, "BUILD %lf %lf %lf %lf %llu", &child.isin_ms, &child.isin_cpu, &child.embree_ms,
+                            &child.embree_cpu, &check) != 5)
+                std::fputs(line, stderr);
+        }
+        if (pclose(pipe) != 0) std::fprintf(stderr, "build child failed: %s\n", command.c_str());
+        if (library[0] == 'i')
+            b.isin_ms = child.isin_ms, b.isin_cpu = child.isin_cpu;
+        else
+            b.embree_ms = child.embree_ms, b.embree_cpu = child.embree_cpu;
     }
-    if (pclose(pipe) != 0) std::fprintf(stderr, "build child failed: %s\n", command.c_str());
     return b;
 }
 
@@ -795,6 +810,8 @@ int main(int argc, char** argv) {
                 opt.build_only = true;
             else if (a == "--threads")
                 opt.build_threads = std::max(1, std::atoi(value()));
+            else if (a == "--library")
+                opt.build_library = value();
             else
                 throw std::invalid_argument("unknown option " + a);
         }

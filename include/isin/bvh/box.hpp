@@ -7,6 +7,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "../detail/huge_pages.hpp"
 #include "../vec.hpp"
 
 // ISIN_FORCE_PURE: no vector extensions and no intrinsics anywhere in the Bvh (the portable
@@ -129,9 +130,15 @@ struct Box4 {
 };
 
 // An allocator whose value-less construct() leaves trivial values uninitialised, so that
-// resizing a vector that the build then fills in parallel does not first zero it serially.
+// resizing a vector that the build then fills in parallel does not first zero it serially; its
+// large blocks ask for huge pages (detail/huge_pages.hpp).
 template <class T>
 struct UninitAllocator : std::allocator<T> {
+    T* allocate(std::size_t n) {
+        T* const p = std::allocator<T>::allocate(n);
+        advise_huge_pages(p, n * sizeof(T));
+        return p;
+    }
     template <class U>
     struct rebind {
         using other = UninitAllocator<U>;

@@ -105,6 +105,9 @@ public:
         threads_ = threads;
         build_binary(prims, {root.get(), centroids.box(), 0});
         tree_.nodes_.reserve(prims.size() / 4 + 1);
+        advise_huge_pages(tree_.nodes_.data(), tree_.nodes_.capacity() * sizeof(Node));
+        tree_.leaves_.reserve(prims.size() / 2 + 1);
+        advise_huge_pages(tree_.leaves_.data(), tree_.leaves_.capacity() * sizeof(tree_.leaves_[0]));
         plan(*root);
         if (root->becomes_leaf()) { // a single leaf: a root node with one child
             tree_.nodes_.emplace_back();
@@ -113,6 +116,8 @@ public:
         } else {
             collapse(*root);
         }
+        tree_.primitives_.reserve(prims.size());
+        advise_huge_pages(tree_.primitives_.data(), prims.size() * sizeof(std::uint32_t));
         tree_.primitives_.resize(prims.size());
         for (std::size_t i = 0; i < prims.size(); ++i) tree_.primitives_[i] = prims[i].index;
         return std::move(tree_);
