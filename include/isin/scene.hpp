@@ -565,14 +565,15 @@ public:
             const Mesh<T>& mesh = *meshes_[inst.mesh].mesh;
             const auto& k = mesh.indices.at(hit.primitive);
             const Triangle<T> tri = mesh.triangle(hit.primitive);
-            // The point from the barycentrics in the mesh's own space, then to the world with its bound.
-            const BoundedPoint<T> local = hit_point(ray, tri, hit);
+            // §2 normal of the mesh's triangle (out of its clockwise face); the point from the
+            // barycentrics in the mesh's own space (hit_point), then to the world with its bound.
+            const Vertex<T> geometric = normal(tri);
+            const BoundedPoint<T> local = detail::triangle_hit_point(tri, hit, geometric);
             const BoundedPoint<T> world = inst.identity ? local : inst.to_world.bounded_point(local);
             sp.point = world.point, sp.error = world.error;
             sp.shading_point = sp.point;
-            // §2 normal of the mesh's triangle (out of its clockwise face), to world space by the
-            // inverse transpose: out of the same side after any transform, mirrors included.
-            const Vertex<T> geometric = normal(tri);
+            // The normal to world space by the inverse transpose: out of the same side after any
+            // transform, mirrors included.
             sp.normal = normalize(Transform<T>::normal(inst.to_object, geometric));
             sp.shading_normal = sp.normal;
             sp.material = meshes_[inst.mesh].material + (mesh.material.empty() ? 0 : mesh.material[hit.primitive]);
@@ -584,7 +585,7 @@ public:
             }
             if (!mesh.colors.empty())
                 sp.tint = b[0] * mesh.colors[k[0]] + b[1] * mesh.colors[k[1]] + b[2] * mesh.colors[k[2]];
-            if (!mesh.normals.empty()) smooth_shading(sp, inst, mesh, k, b, tri, geometric, ray);
+            if (!mesh.normals.empty()) smooth_shading(sp, inst, mesh, k, b, tri, geometric, local.point, ray);
             return sp;
         }
         for_each_kind([&](auto kind, const auto& vec) {
@@ -621,11 +622,11 @@ private:
     };
 
     // Shading normal and shadow-ray point of a hit on a mesh with vertex normals (see SurfacePoint).
-    // `b` are the barycentric weights of the triangle's vertices, `geometric` its §2 normal (object
-    // space). Vertex normals that are zero or not finite leave the geometric normal in place.
+    // `b` are the barycentric weights of the triangle's vertices, `geometric` its §2 normal and `p`
+    // the hit point Σ b_i·P_i (object space). Vertex normals that are zero or not finite leave the geometric normal in place.
     static void smooth_shading(SurfacePoint<T>& sp, const Instance& inst, const Mesh<T>& mesh,
                                const std::array<std::uint32_t, 3>& k, const T (&b)[3], const Triangle<T>& tri,
-                               const Vertex<T>& geometric, const Ray<T>& ray) {
+                               const Vertex<T>& geometric, const Vertex<T>& p, const Ray<T>& ray) {
         const Vertex<T>* n[3] = {&mesh.normals[k[0]], &mesh.normals[k[1]], &mesh.normals[k[2]]};
         const Vertex<T> interpolated = b[0] * *n[0] + b[1] * *n[1] + b[2] * *n[2]; // Phong: blend the normals
         Vertex<T> shading = normalize(Transform<T>::normal(inst.to_object, interpolated));
@@ -640,7 +641,6 @@ private:
         const bool from_front =
             dot(geometric, inst.identity ? ray.direction : inst.to_object.vector(ray.direction)) < T(0);
         const Vertex<T> P[3] = {tri.v0, tri.v1, tri.v2};
-        const Vertex<T> p = b[0] * P[0] + b[1] * P[1] + b[2] * P[2];
         Vertex<T> lift{T(0), T(0), T(0)};
         for (int i = 0; i < 3; ++i) {
             Vertex<T> ni = *n[i];

@@ -239,15 +239,29 @@ template <class T>
 ///   triangle test, computing from a ray origin on the triangle, may place it. pbrt-v4 adds a
 ///   conservative t > 0 to its test instead (§6.8.7), which here cost 20–40% of the Bvh's speed;
 ///   the margin matters only where |P| is below the triangle's size (near the origin).
+namespace detail {
+/// hit_point's work, given the triangle's §2 normal N (callers that also need N compute it once).
 template <class T>
-[[nodiscard]] inline BoundedPoint<T> hit_point(const Ray<T>&, const Triangle<T>& tri, const Hit<T>& hit) noexcept {
+[[nodiscard]] ISIN_DETAIL_INLINE BoundedPoint<T> triangle_hit_point(const Triangle<T>& tri, const Hit<T>& hit,
+                                                                    const Vertex<T>& N) noexcept {
+    // Maxima by plain comparisons without NaN checks (one maxss each): a NaN margin (0/0 from a
+    // triangle shrunk to a point, whose point is then exact) leaves the point's own bound.
+    const auto larger = [](T a, T b) { return a < b ? b : a; };
+    const auto largest = [&](const Vertex<T>& a) {
+        return larger(larger(std::fabs(a.x), std::fabs(a.y)), std::fabs(a.z));
+    };
     const T b1 = hit.u, b2 = hit.v, b0 = T(1) - b1 - b2;
     const Vertex<T> p0 = b0 * tri.v0, p1 = b1 * tri.v1, p2 = b2 * tri.v2;
-    const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
-    const T L = max_of(max_of(max_abs(e1), max_abs(e2)), max_abs(tri.v2 - tri.v1));
-    const T test_margin = rounding_gamma<T>(32) * L * (L * L / max_abs(cross(e1, e2))); // γ₃₂·L³/|N|∞
+    const T L = larger(larger(largest(tri.v1 - tri.v0), largest(tri.v2 - tri.v0)), largest(tri.v2 - tri.v1));
+    const T test_margin = rounding_gamma<T>(32) * L * (L * L / largest(N));     // γ₃₂·L³/|N|∞
     const Vertex<T> own = rounding_gamma<T>(7) * (abs(p0) + abs(p1) + abs(p2)); // pbrt-v4 §6.8.5: γ₇·Σ|bᵢ·Vᵢ|
-    return {p0 + p1 + p2, {max_of(own.x, test_margin), max_of(own.y, test_margin), max_of(own.z, test_margin)}};
+    return {p0 + p1 + p2, {larger(own.x, test_margin), larger(own.y, test_margin), larger(own.z, test_margin)}};
+}
+} // namespace detail
+
+template <class T>
+[[nodiscard]] inline BoundedPoint<T> hit_point(const Ray<T>&, const Triangle<T>& tri, const Hit<T>& hit) noexcept {
+    return detail::triangle_hit_point(tri, hit, normal(tri));
 }
 
 } // namespace isin
