@@ -365,7 +365,11 @@ TEST_CASE("read_image: the hardening reproducers are refused with a reason, none
     // D2: stb 2.27 wrote past a Huffman table (code counts summing to 289), used Huffman and
     // quantisation tables the file never defined (uninitialised memory: a crash after a primer,
     // different pixels on every run). D3: a 69-byte PNG asked for 805 MB, a 665-byte JPEG decoded
-    // as 16384² invented pixels. Each is now refused before stb sees it.
+    // as 16384² invented pixels. D4: an AC magnitude (a 16-bit code, then 10 bits) that straddled
+    // the EOI marker drove stb's bit count to -8, a shift by 32 in stbi__grow_buffer_unsafe
+    // (UBSan); the primer of D2 took 122 of its 143 blocks from past its data; two DC differences
+    // of 32767 times a 16-bit quantiser of 65535 overflowed stb's int. Each is now refused before
+    // stb sees it.
     const struct {
         const char* file;
         const char* why;
@@ -373,9 +377,13 @@ TEST_CASE("read_image: the hardening reproducers are refused with a reason, none
                  {"jpeg_uninit_huffman.jpg", "Huffman table that is not defined"},
                  {"jpeg_no_dqt_uninitialized.jpg", "quantisation table that is not defined"},
                  {"jpeg_16384x16384_from_665B.jpg", "cannot code"},
+                 {"jpeg_ac_past_the_data_shift32.jpg", "ends inside a block"},
+                 {"jpeg_uninit_huffman_primer.jpg", "ends inside a block"},
+                 {"jpeg_dc_times_quantiser_overflow.jpg", "coefficient out of range"},
                  {"png_16384x16384_69B.png", "cannot hold"},
                  {"png_memcpy_null_len0.png", "truncated PNG"}};
-    (void)isin::read_image(repro("jpeg_uninit_huffman_primer.jpg")); // a valid file that left stale tables behind
+    // A valid JPEG first, so that the refused files would find its tables in reused memory.
+    (void)isin::read_image_from_memory(flat_jpeg, sizeof flat_jpeg);
     for (const auto& c : cases) {
         CAPTURE(std::string(c.file));
         const std::string why = thrown<std::runtime_error>([&] { (void)isin::read_image(repro(c.file)); });
@@ -408,6 +416,15 @@ TEST_CASE("read_image: truncated PNG and JPEG data are errors, not images padded
     for (std::size_t cut : {std::size_t(4), jpeg.size() / 2, jpeg.size() - 2, jpeg.size() - 1}) {
         CAPTURE(cut);
         CHECK_THROWS_AS((void)isin::read_image_from_memory(jpeg.data(), cut), std::runtime_error);
+    }
+    // Entropy-coded data cut short with its EOI kept: stb would decode zeros past the data (and,
+    // at some cuts, shift by 32 or more), so every cut is refused.
+    const std::size_t data_end = jpeg.size() - 2; // the 8 bytes of the scan end at EOI
+    for (std::size_t drop = 1; drop <= 7; ++drop) {
+        CAPTURE(drop);
+        const std::string cut = jpeg.substr(0, data_end - drop) + "\xff\xd9";
+        CHECK(contains(thrown<std::runtime_error>([&] { (void)isin::read_image_from_memory(cut.data(), cut.size()); }),
+                       "ends inside a block"));
     }
 }
 

@@ -3,11 +3,14 @@
 /// trusts what the files say: a JPEG Huffman table whose code counts sum past 256 writes past its
 /// arrays, a scan may use a Huffman or quantisation table the file never defined (stb reads
 /// uninitialised memory), truncated entropy-coded data decodes as zeros (a 665-byte JPEG becomes
-/// 16384² invented pixels), and a PNG header alone decides how much is allocated (a 69-byte PNG
-/// asks for 805 MB). These functions walk the file's structure and refuse such files with a
-/// reason, and read the size from the header so that the pixel budget is checked before any
-/// decoding. They allocate nothing in proportion to the input (PNG: at most one copy of it, see
-/// check_png).
+/// 16384² invented pixels; a code cut by the data's end drives its bit count negative, a shift by
+/// 32 or more), its DC arithmetic overflows int, and a PNG header alone decides how much is
+/// allocated (a 69-byte PNG asks for 805 MB). These functions walk the file's structure and
+/// refuse such files with a reason, and read the size from the header so that the pixel budget
+/// is checked before any decoding. They allocate nothing in proportion to the input (PNG: at most one copy of it, see
+/// check_png; progressive JPEG: 8 bytes per 8×8 block, see check_jpeg_scans).
+#include <algorithm>
+#include <bitset>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -125,11 +128,346 @@ struct ImageCheck {
     return c;
 }
 
+/// Where the entropy-coded data that starts at `pos` ends: `end` is the first byte of the marker
+/// that ends it (T.81 B.1.1.5: FF, fill FFs, a code other than 00), `code` that marker's code,
+/// `next` the byte after it; `end == n` when no marker follows.
+struct JpegMarkerAt {
+    std::size_t end, next;
+    unsigned code;
+};
+[[nodiscard]] inline JpegMarkerAt next_jpeg_marker(const unsigned char* p, std::size_t n, std::size_t pos) noexcept {
+    while (pos < n) {
+        if (p[pos] != 0xff) {
+            ++pos;
+            continue;
+        }
+        std::size_t q = pos + 1;
+        while (q < n && p[q] == 0xff) ++q;
+        if (q < n && p[q] == 0x00) {
+            pos = q + 1;
+            continue;
+        }
+        return {pos, q < n ? q + 1 : n, q < n ? p[q] : 0u};
+    }
+    return {n, n, 0u};
+}
+
+/// A JPEG Huffman table as T.81 F.2.2.3 decodes it: per code length, the first and the last code
+/// (-1: none of that length) and where that length's symbols start; `fast` looks up the codes of
+/// at most 9 bits by the next 9 bits (length << 8 | symbol, 0 for a longer code).
+struct JpegHuffman {
+    std::int32_t min_code[17] = {}, max_code[17] = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
+    unsigned first[17] = {};
+    unsigned char values[256] = {};
+    std::uint16_t fast[512] = {};
+};
+
+/// Builds `h` from a DHT table's 16 code counts (summing to at most 256) and its symbols; false
+/// when the counts overfill the code space (T.81 C), a table stb refuses as well.
+[[nodiscard]] inline bool build_jpeg_huffman(const unsigned char* counts, const unsigned char* symbols,
+                                             JpegHuffman& h) noexcept {
+    h = JpegHuffman{};
+    std::int32_t code = 0;
+    unsigned k = 0;
+    for (unsigned length = 1; length <= 16; ++length) {
+        const unsigned count = counts[length - 1];
+        h.min_code[length] = code, h.first[length] = k;
+        for (unsigned i = 0; i < count && length <= 9; ++i) {
+            const unsigned from = unsigned(code + std::int32_t(i)) << (9 - length), to = from + (1u << (9 - length));
+            for (unsigned j = from; j < to && j < 512; ++j) h.fast[j] = std::uint16_t(length << 8 | symbols[k + i]);
+        }
+        code += std::int32_t(count), k += count;
+        if (code > (std::int32_t(1) << length)) return false;
+        h.max_code[length] = count ? code - 1 : -1;
+        code <<= 1;
+    }
+    std::copy(symbols, symbols + k, h.values);
+    return true;
+}
+
+/// The bits of one restart interval of entropy-coded data, [p, end) with FF 00 read as FF: as
+/// stb reads them, except that a read past `end` fails where stb would invent zero bits.
+struct JpegBits {
+    const unsigned char* p;
+    const unsigned char* end;
+    std::uint64_t buffer = 0; // the next `count` bits, from the top
+    unsigned count = 0;
+
+    void fill() noexcept {
+        while (count <= 56 && p < end) {
+            const unsigned char byte = *p++;
+            if (byte == 0xff) { // the FF of FF (FF…) 00
+                while (p < end && *p == 0xff) ++p;
+                if (p < end) ++p;
+            }
+            buffer |= std::uint64_t(byte) << (56 - count);
+            count += 8;
+        }
+    }
+    /// Takes `n` bits (at most 32) into `v`; false if the data has fewer.
+    [[nodiscard]] bool bits(unsigned n, std::uint32_t& v) noexcept {
+        v = 0;
+        if (n == 0) return true;
+        if (count < n) fill();
+        if (count < n) return false;
+        v = std::uint32_t(buffer >> (64 - n));
+        buffer <<= n, count -= n;
+        return true;
+    }
+    /// Skips `n` bits; false if the data has fewer.
+    [[nodiscard]] bool skip(unsigned n) noexcept {
+        for (std::uint32_t v = 0; n > 0; n -= std::min(n, 32u))
+            if (!bits(std::min(n, 32u), v)) return false;
+        return true;
+    }
+    /// The next symbol; -1 for a code the table does not have, -2 past the end.
+    [[nodiscard]] int decode(const JpegHuffman& h) noexcept {
+        if (count < 16) fill();
+        const std::uint32_t next = std::uint32_t(buffer >> 48); // 16 bits, zeros past the data
+        unsigned length = h.fast[next >> 7] >> 8;
+        int symbol = h.fast[next >> 7] & 0xff;
+        if (length == 0) {
+            for (length = 10; length <= 16; ++length)
+                if (std::int32_t(next >> (16 - length)) <= h.max_code[length]) break;
+            if (length > 16) return count < 16 ? -2 : -1;
+            symbol = h.values[h.first[length] + unsigned(std::int32_t(next >> (16 - length)) - h.min_code[length])];
+        }
+        if (length > count) return -2;
+        buffer <<= length, count -= length;
+        return symbol;
+    }
+};
+
+/// Walks the entropy-coded data of every scan of a JPEG that check_jpeg's structural pass has
+/// accepted, decoding its Huffman codes (T.81 F.2.2, G.1.2) as stb 2.27 parses them, without the
+/// coefficients' values: "" if every restart interval holds all the bits its blocks take, else why
+/// not. stb reads zero bits past the data instead of failing, and when a code or a magnitude
+/// straddles the marker that ends the data its bit count goes negative (a shift by 32 or more in
+/// stbi__grow_buffer_unsafe, undefined behaviour; fixed in stb 2.28); refusing truncated intervals
+/// here keeps stb away from that state. For progressive files it keeps which coefficients are
+/// non-zero (8 bytes a block, 1/16 of stb's coefficients), since refinement scans read one bit per
+/// non-zero coefficient: AC scans must follow the component's first DC scan (before it stb reads
+/// memory it never wrote) and coefficients must fit stb's 16 bits. It also refuses DC predictions
+/// whose sum, or product with the quantiser (progressive: 2^Al), overflows stb's int (stb 2.28
+/// checks both too).
+[[nodiscard]] inline std::string check_jpeg_scans(const unsigned char* p, std::size_t n) {
+    const std::string truncated = "truncated or corrupt JPEG: a scan's data ends inside a block";
+    JpegHuffman tables[2][4];
+    unsigned restart_interval = 0, width = 0, height = 0, components = 0, h_max = 1, v_max = 1;
+    std::int64_t quant_dc[4] = {}; // the DC entry of each quantisation table
+    bool progressive = false;
+    struct Component {
+        unsigned id = 0, h = 1, v = 1, tq = 0;
+        bool dc_scanned = false;
+        std::int64_t dc_pred = 0;             // stb's DC prediction, an int
+        std::vector<std::bitset<64>> nonzero; // progressive: per block, in zig-zag order
+    } comp[4];
+    std::size_t pos = 2;
+    for (;;) {
+        while (pos < n && p[pos] != 0xff) ++pos;
+        while (pos < n && p[pos] == 0xff) ++pos;
+        if (pos >= n) return "";
+        const unsigned marker = p[pos++];
+        if (marker == 0xd9) return "";
+        if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd8)) continue;
+        const std::size_t length = big_endian16(p + pos); // within the data: check_jpeg's first pass
+        const unsigned char* s = p + pos + 2;
+        const std::size_t size = length - 2;
+        pos += length;
+        if (marker == 0xc4) {
+            for (std::size_t k = 0; k < size;) {
+                std::size_t codes = 0;
+                for (int i = 1; i <= 16; ++i) codes += s[k + std::size_t(i)];
+                if (!build_jpeg_huffman(s + k + 1, s + k + 17, tables[s[k] >> 4][s[k] & 15]))
+                    return "corrupt JPEG: a Huffman table has more codes of some length than fit";
+                k += 17 + codes;
+            }
+        } else if (marker == 0xdb) {
+            for (std::size_t k = 0; k < size; k += 1 + (s[k] >> 4 ? 128 : 64))
+                quant_dc[s[k] & 15] = s[k] >> 4 ? std::int64_t(big_endian16(s + k + 1)) : s[k + 1];
+        } else if (marker == 0xdd) {
+            if (size != 2) return "malformed JPEG: bad DRI segment";
+            restart_interval = big_endian16(s);
+        } else if (marker == 0xc0 || marker == 0xc1 || marker == 0xc2) {
+            progressive = marker == 0xc2;
+            height = big_endian16(s + 1), width = big_endian16(s + 3), components = s[5];
+            for (unsigned i = 0; i < components; ++i) {
+                comp[i].id = s[6 + 3 * i], comp[i].h = s[7 + 3 * i] >> 4u, comp[i].v = s[7 + 3 * i] & 15u;
+                comp[i].tq = s[8 + 3 * i];
+                if (comp[i].h < 1 || comp[i].h > 4 || comp[i].v < 1 || comp[i].v > 4)
+                    return "malformed JPEG: bad sampling factors in the frame header";
+                h_max = std::max(h_max, comp[i].h), v_max = std::max(v_max, comp[i].v);
+            }
+        } else if (marker == 0xda) {
+            const unsigned count = s[0], ss = s[1 + 2 * count], se = s[2 + 2 * count];
+            const unsigned ah = s[3 + 2 * count] >> 4, al = s[3 + 2 * count] & 15u;
+            if (count < 1 || count > components) return "malformed JPEG: bad component count in a scan header";
+            if (progressive
+                    ? (ss > se || se > 63 || ah > 13 || al > 13 || (ss == 0 && se != 0) || (ss != 0 && count != 1))
+                    : (ss != 0 || ah != 0 || al != 0))
+                return "corrupt JPEG: bad spectral selection or successive approximation in a scan header";
+            const unsigned mcu_x = (width + 8 * h_max - 1) / (8 * h_max),
+                           mcu_y = (height + 8 * v_max - 1) / (8 * v_max);
+            struct ScanComponent {
+                Component* c;
+                const JpegHuffman *dc, *ac;
+            } sc[4] = {};
+            for (unsigned i = 0; i < count; ++i) {
+                for (unsigned j = 0; j < components; ++j)
+                    if (comp[j].id == s[1 + 2 * i]) sc[i].c = &comp[j];
+                const unsigned dc = s[2 + 2 * i] >> 4, ac = s[2 + 2 * i] & 15u;
+                if (dc > 3 || ac > 3) return "malformed JPEG: bad Huffman table id in a scan header"; // stb's too
+                sc[i].dc = &tables[0][dc], sc[i].ac = &tables[1][ac];
+                if (progressive && sc[i].c->nonzero.empty())
+                    sc[i].c->nonzero.resize(std::size_t(mcu_x) * sc[i].c->h * mcu_y * sc[i].c->v);
+                if (progressive && ss != 0 && !sc[i].c->dc_scanned)
+                    return "corrupt JPEG: an AC scan comes before the component's first DC scan";
+            }
+            // the data: one restart interval after another, each ended by an RSTn marker
+            JpegMarkerAt at = next_jpeg_marker(p, n, pos);
+            JpegBits in{p + pos, p + at.end};
+            std::uint32_t eob_run = 0;
+            for (Component& c : comp) c.dc_pred = 0;
+            std::bitset<64> band; // the scan's coefficients, in zig-zag order
+            for (unsigned k = ss; k <= std::min(se, 63u); ++k) band.set(k);
+            // one block of the scan's component `c`, at `b` in its block grid: 0, or 1 past the end
+            // of the data, 2 where stb refuses the data, 3 for a coefficient past stb's int (DC) or
+            // short (AC)
+            const auto block = [&](const ScanComponent& c, std::size_t b) -> int {
+                std::uint32_t v = 0;
+                if (!progressive || ss == 0) {                                // DC, then (baseline) the AC coefficients
+                    if (progressive && ah != 0) return in.bits(1, v) ? 0 : 1; // DC refinement: one bit
+                    if (progressive) c.c->nonzero[b].reset();
+                    const int t = in.decode(*c.dc);
+                    if (t < -1) return 1;
+                    if (t < 0 || t > 15) return 2;
+                    if (!in.bits(unsigned(t), v)) return 1;
+                    const std::int64_t diff =
+                        t == 0 || v >> (t - 1) ? std::int64_t(v) : std::int64_t(v) - (std::int64_t(1) << t) + 1;
+                    c.c->dc_pred += diff; // then times the quantiser (baseline) or 2^Al (progressive), in int
+                    const std::int64_t scaled =
+                        c.c->dc_pred * (progressive ? std::int64_t(1) << al : quant_dc[c.c->tq]);
+                    if (c.c->dc_pred < INT32_MIN || c.c->dc_pred > INT32_MAX || scaled < INT32_MIN ||
+                        scaled > INT32_MAX)
+                        return 3;
+                    for (unsigned k = 1; !progressive && k < 64;) {
+                        const int rs = in.decode(*c.ac);
+                        if (rs < -1) return 1;
+                        if (rs < 0) return 2;
+                        if ((rs & 15) == 0) {
+                            if (rs != 0xf0) break;
+                            k += 16;
+                        } else {
+                            k += unsigned(rs >> 4) + 1;
+                            if (!in.bits(unsigned(rs & 15), v)) return 1;
+                        }
+                    }
+                    return 0;
+                }
+                std::bitset<64>& nz = c.c->nonzero[b];
+                if (ah == 0) { // first AC scan of the band
+                    if (eob_run) return --eob_run, 0;
+                    unsigned k = ss;
+                    do {
+                        const int rs = in.decode(*c.ac);
+                        if (rs < -1) return 1;
+                        if (rs < 0) return 2;
+                        const unsigned r = unsigned(rs) >> 4, bits = unsigned(rs) & 15;
+                        if (bits == 0) {
+                            if (r < 15) {
+                                if (!in.bits(r, v)) return 1;
+                                eob_run = (std::uint32_t(1) << r) + v - 1;
+                                break;
+                            }
+                            k += 16;
+                        } else {
+                            k += r;
+                            if (!in.bits(bits, v)) return 1;
+                            const std::uint32_t magnitude = v >> (bits - 1) ? v : (std::uint32_t(1) << bits) - 1 - v;
+                            if ((magnitude << al) > 32767) return 3; // stb keeps coefficients in 16 bits
+                            nz.set(std::min(k, 63u)); // stb puts a run past the block on its last coefficient
+                            ++k;
+                        }
+                    } while (k <= se);
+                    return 0;
+                }
+                if (eob_run) { // refinement: a correction bit for each non-zero coefficient of the band
+                    --eob_run;
+                    return in.skip(unsigned((nz & band).count())) ? 0 : 1;
+                }
+                unsigned k = ss;
+                do {
+                    const int rs = in.decode(*c.ac);
+                    if (rs < -1) return 1;
+                    if (rs < 0) return 2;
+                    unsigned r = unsigned(rs) >> 4;
+                    const unsigned bits = unsigned(rs) & 15;
+                    if (bits == 0 && r < 15) {
+                        if (!in.bits(r, v)) return 1;
+                        eob_run = (std::uint32_t(1) << r) - 1 + v;
+                        r = 64;
+                    } else if (bits != 0) {
+                        if (bits != 1) return 2;
+                        if (!in.bits(1, v)) return 1;
+                    }
+                    while (k <= se) {
+                        const unsigned z = k++;
+                        if (nz.test(z)) {
+                            if (!in.bits(1, v)) return 1;
+                        } else if (r == 0) {
+                            if (bits) nz.set(z);
+                            break;
+                        } else {
+                            --r;
+                        }
+                    }
+                } while (k <= se);
+                return 0;
+            };
+            // the MCUs as stb orders them: a lone component's blocks row by row, else interleaved
+            const Component& one = *sc[0].c;
+            const std::size_t one_w = ((std::size_t(width) * one.h + h_max - 1) / h_max + 7) / 8;
+            const std::size_t one_h = ((std::size_t(height) * one.v + v_max - 1) / v_max + 7) / 8;
+            const std::size_t mcus = count == 1 ? one_w * one_h : std::size_t(mcu_x) * mcu_y;
+            unsigned todo = restart_interval;
+            for (std::size_t m = 0; m < mcus; ++m) {
+                for (unsigned i = 0; i < count; ++i) {
+                    const Component& c = *sc[i].c;
+                    const std::size_t grid_w = std::size_t(mcu_x) * c.h;
+                    const unsigned bw = count == 1 ? 1 : c.h, bh = count == 1 ? 1 : c.v;
+                    const std::size_t x0 = count == 1 ? m % one_w : m % mcu_x * c.h;
+                    const std::size_t y0 = count == 1 ? m / one_w : m / mcu_x * c.v;
+                    for (unsigned y = 0; y < bh; ++y)
+                        for (unsigned x = 0; x < bw; ++x)
+                            if (const int r = block(sc[i], (y0 + y) * grid_w + x0 + x))
+                                return r == 1   ? truncated
+                                       : r == 2 ? "corrupt JPEG: bad Huffman-coded data in a scan"
+                                                : "corrupt JPEG: a coefficient out of range";
+                }
+                if (restart_interval && --todo == 0 && m + 1 < mcus) { // the next interval, after RSTn
+                    if (at.end == n || at.code < 0xd0 || at.code > 0xd7)
+                        return "truncated or corrupt JPEG: a scan has fewer restart intervals than its blocks need";
+                    const std::size_t from = at.next;
+                    at = next_jpeg_marker(p, n, from);
+                    in = JpegBits{p + from, p + at.end};
+                    eob_run = 0, todo = restart_interval;
+                    for (Component& k : comp) k.dc_pred = 0;
+                }
+            }
+            if (progressive && ss == 0 && ah == 0)
+                for (unsigned i = 0; i < count; ++i) sc[i].c->dc_scanned = true;
+            while (at.end < n && at.code >= 0xd0 && at.code <= 0xd7) at = next_jpeg_marker(p, n, at.next);
+            pos = at.end;
+        }
+    }
+}
+
 /// Checks a JPEG's marker structure (ITU T.81 Annex B) as stb's baseline and progressive decoder
 /// will read it: Huffman tables of at most 256 codes, every table a scan (or, progressive, the
 /// final dequantisation) uses defined before it, the size within the budget, an EOI marker at the
 /// end (truncated data is an error), and at least one bit of entropy-coded data for every 8×8
-/// block of the full-resolution component (no block is coded in fewer).
+/// block of the full-resolution component (no block is coded in fewer); then every scan's data
+/// must hold all the bits its blocks take (check_jpeg_scans).
 [[nodiscard]] inline ImageCheck check_jpeg(const unsigned char* p, std::size_t n, const ReadLimits& limits) {
     ImageCheck c;
     bool quant[4] = {}, huffman[2][4] = {}, frame = false, progressive = false;
@@ -243,6 +581,7 @@ struct ImageCheck {
         return fail("truncated or corrupt JPEG: " + std::to_string(entropy_bytes) +
                     " bytes of image data cannot code the " + std::to_string(blocks) + " blocks of a " +
                     std::to_string(c.width) + "×" + std::to_string(c.height) + " image");
+    c.why = check_jpeg_scans(p, n);
     return c;
 }
 
