@@ -40,6 +40,7 @@ struct BinaryNode {
     T cost[8] = {};
     std::uint8_t how[8] = {};
     std::uint8_t wide_split = 1;
+    bool planned = false; // cost, how and wide_split are set (BvhBuilder::plan)
     [[nodiscard]] bool leaf() const noexcept { return !left; }
     [[nodiscard]] bool becomes_leaf() const noexcept { return !left || how[0] == merged; }
 };
@@ -323,7 +324,7 @@ private:
                     if (at.node->count >= task_min)
                         has_children = split(prims, at, left, right);
                     else
-                        build_subtree(prims, at);
+                        build_subtree(prims, at), plan(*at.node); // planned here, on this thread
                 } catch (...) {
                     lock.lock();
                     --working, failed = true;
@@ -362,7 +363,10 @@ private:
     // a node costing `node_cost` and testing a leaf block `leaf_cost` per unit of box area
     // (Ylitie, Karras & Laine 2017, §3.1, with whole subtrees of up to leaf_size primitives
     // allowed to become one leaf). Fills BinaryNode::cost, how and wide_split, bottom-up.
+    // Subtrees that build_binary's threads planned as they finished them are skipped.
     void plan(BinaryNode<T>& n) const {
+        if (n.planned) return;
+        n.planned = true;
         const T area = n.box.area();
         if (n.leaf()) {
             for (int j = 0; j < 8; ++j) n.cost[j] = leaf_cost * area, n.how[j] = 0;
