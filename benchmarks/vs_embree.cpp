@@ -587,7 +587,7 @@ struct BuildTimes {
 // The build times of `mesh` on `threads` threads: each library in a child process of its own.
 BuildTimes child_build(const Options& opt, const std::string& mesh, int threads) {
     BuildTimes b;
-    for (const char* library : {"isin", "embree"}) {
+    for (const std::string library : {"isin", "embree"}) {
         const std::string command = "'" + opt.self + "' --build-only --mesh '" + mesh + "' --threads " +
                                     std::to_string(threads) + " --repeats " + std::to_string(opt.repeats) +
                                     " --library " + library;
@@ -602,7 +602,7 @@ BuildTimes child_build(const Options& opt, const std::string& mesh, int threads)
                 std::fputs(line, stderr);
         }
         if (pclose(pipe) != 0) std::fprintf(stderr, "build child failed: %s\n", command.c_str());
-        if (library[0] == 'i')
+        if (library == "isin")
             b.isin_ms = child.isin_ms, b.isin_cpu = child.isin_cpu;
         else
             b.embree_ms = child.embree_ms, b.embree_cpu = child.embree_cpu;

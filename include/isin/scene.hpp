@@ -623,7 +623,8 @@ private:
 
     // Shading normal and shadow-ray point of a hit on a mesh with vertex normals (see SurfacePoint).
     // `b` are the barycentric weights of the triangle's vertices, `geometric` its §2 normal and `p`
-    // the hit point Σ b_i·P_i (object space). Vertex normals that are zero or not finite leave the geometric normal in place.
+    // the hit point Σ b_i·P_i (object space). Vertex normals that are zero or not finite leave the
+    // geometric normal in place.
     static void smooth_shading(SurfacePoint<T>& sp, const Instance& inst, const Mesh<T>& mesh,
                                const std::array<std::uint32_t, 3>& k, const T (&b)[3], const Triangle<T>& tri,
                                const Vertex<T>& geometric, const Vertex<T>& p, const Ray<T>& ray) {

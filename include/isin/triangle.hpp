@@ -1,6 +1,7 @@
 #pragma once
 /// isin — triangles: the normal of note §2 and the ray–triangle tests of §4 (area test) and §10
 /// (Möller–Trumbore).
+#include <algorithm>
 #include <limits>
 #include <utility>
 
@@ -244,18 +245,16 @@ namespace detail {
 template <class T>
 [[nodiscard]] ISIN_DETAIL_INLINE BoundedPoint<T> triangle_hit_point(const Triangle<T>& tri, const Hit<T>& hit,
                                                                     const Vertex<T>& N) noexcept {
-    // Maxima by plain comparisons without NaN checks (one maxss each): a NaN margin (0/0 from a
-    // triangle shrunk to a point, whose point is then exact) leaves the point's own bound.
-    const auto larger = [](T a, T b) { return a < b ? b : a; };
-    const auto largest = [&](const Vertex<T>& a) {
-        return larger(larger(std::fabs(a.x), std::fabs(a.y)), std::fabs(a.z));
-    };
+    // Maxima by std::max, without max_of's NaN checks (one maxss each, no branches): a NaN margin
+    // (0/0 from a triangle shrunk to a point, whose point is then exact) leaves the own bound.
+    using std::max;
+    const auto largest = [](const Vertex<T>& a) { return max(max(std::fabs(a.x), std::fabs(a.y)), std::fabs(a.z)); };
     const T b1 = hit.u, b2 = hit.v, b0 = T(1) - b1 - b2;
     const Vertex<T> p0 = b0 * tri.v0, p1 = b1 * tri.v1, p2 = b2 * tri.v2;
-    const T L = larger(larger(largest(tri.v1 - tri.v0), largest(tri.v2 - tri.v0)), largest(tri.v2 - tri.v1));
+    const T L = max(max(largest(tri.v1 - tri.v0), largest(tri.v2 - tri.v0)), largest(tri.v2 - tri.v1));
     const T test_margin = rounding_gamma<T>(32) * L * (L * L / largest(N));     // γ₃₂·L³/|N|∞
     const Vertex<T> own = rounding_gamma<T>(7) * (abs(p0) + abs(p1) + abs(p2)); // pbrt-v4 §6.8.5: γ₇·Σ|bᵢ·Vᵢ|
-    return {p0 + p1 + p2, {larger(own.x, test_margin), larger(own.y, test_margin), larger(own.z, test_margin)}};
+    return {p0 + p1 + p2, {max(own.x, test_margin), max(own.y, test_margin), max(own.z, test_margin)}};
 }
 } // namespace detail
 

@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "../detail/huge_pages.hpp"
 #include "../detail/parallel.hpp"
 #include "box.hpp"
 #include "tree.hpp"
@@ -105,10 +106,8 @@ public:
         root->box = root_box, root->count = static_cast<std::uint32_t>(prims.size());
         threads_ = threads;
         build_binary(prims, {root.get(), centroids.box(), 0});
-        tree_.nodes_.reserve(prims.size() / 4 + 1);
-        advise_huge_pages(tree_.nodes_.data(), tree_.nodes_.capacity() * sizeof(Node));
-        tree_.leaves_.reserve(prims.size() / 2 + 1);
-        advise_huge_pages(tree_.leaves_.data(), tree_.leaves_.capacity() * sizeof(tree_.leaves_[0]));
+        reserve_huge_pages(tree_.nodes_, prims.size() / 4 + 1);
+        reserve_huge_pages(tree_.leaves_, prims.size() / 2 + 1);
         plan(*root);
         if (root->becomes_leaf()) { // a single leaf: a root node with one child
             tree_.nodes_.emplace_back();
@@ -117,8 +116,7 @@ public:
         } else {
             collapse(*root);
         }
-        tree_.primitives_.reserve(prims.size());
-        advise_huge_pages(tree_.primitives_.data(), prims.size() * sizeof(std::uint32_t));
+        reserve_huge_pages(tree_.primitives_, prims.size());
         tree_.primitives_.resize(prims.size());
         for (std::size_t i = 0; i < prims.size(); ++i) tree_.primitives_[i] = prims[i].index;
         return std::move(tree_);

@@ -29,4 +29,11 @@ inline void advise_huge_pages([[maybe_unused]] const void* data, [[maybe_unused]
 #endif
 }
 
+/// v.reserve(n), its block advised for huge pages before anything is written to it.
+template <class Vector>
+void reserve_huge_pages(Vector& v, std::size_t n) {
+    v.reserve(n);
+    advise_huge_pages(v.data(), v.capacity() * sizeof(*v.data()));
+}
+
 } // namespace isin::detail

@@ -152,6 +152,14 @@ struct JpegMarkerAt {
     return {n, n, 0u};
 }
 
+/// Where a scan's entropy-coded data that starts at `pos` ends: the first marker after it other
+/// than RSTn (the restart markers lie inside the data).
+[[nodiscard]] inline JpegMarkerAt end_of_scan_data(const unsigned char* p, std::size_t n, std::size_t pos) noexcept {
+    JpegMarkerAt at = next_jpeg_marker(p, n, pos);
+    while (at.end < n && at.code >= 0xd0 && at.code <= 0xd7) at = next_jpeg_marker(p, n, at.next);
+    return at;
+}
+
 /// A JPEG Huffman table as T.81 F.2.2.3 decodes it: per code length, the first and the last code
 /// (-1: none of that length) and where that length's symbols start; `fast` looks up the codes of
 /// at most 9 bits by the next 9 bits (length << 8 | symbol, 0 for a longer code).
@@ -456,8 +464,7 @@ struct JpegBits {
             }
             if (progressive && ss == 0 && ah == 0)
                 for (unsigned i = 0; i < count; ++i) sc[i].c->dc_scanned = true;
-            while (at.end < n && at.code >= 0xd0 && at.code <= 0xd7) at = next_jpeg_marker(p, n, at.next);
-            pos = at.end;
+            pos = end_of_scan_data(p, n, at.end).end; // past the RSTn markers the scan did not need
         }
     }
 }
@@ -552,19 +559,7 @@ struct JpegBits {
                     return fail("corrupt JPEG: a scan uses a quantisation table that is not defined");
             }
             const std::size_t start = pos;
-            while (pos < n) {
-                if (p[pos] != 0xff) {
-                    ++pos;
-                    continue;
-                }
-                std::size_t q = pos + 1;
-                while (q < n && p[q] == 0xff) ++q; // FF FF … 00 is a stuffed FF, FF FF … xx the marker xx
-                if (q < n && (p[q] == 0x00 || (p[q] >= 0xd0 && p[q] <= 0xd7))) {
-                    pos = q + 1;
-                    continue;
-                }
-                break;
-            }
+            pos = end_of_scan_data(p, n, pos).end;
             entropy_bytes += pos - start;
         } else if (!(marker == 0xdd || marker == 0xdc || (marker >= 0xe0 && marker <= 0xef) || marker == 0xfe)) {
             return fail("unsupported JPEG: marker 0x" +
