@@ -166,7 +166,7 @@ int main(int argc, char** argv) {
         const isin::Vec3f view = eye_option ? *eye_option - centre // from the target to the eye
                                             : distance * isin::normalize(isin::Vec3f{0.45f, 0.5f, -1.0f});
 
-        isin::Scene<float, isin::Triangle, isin::TexturedTriangle> scene;
+        isin::StandardScene<float> scene; // compiled once in isin::io (its sphere list stays empty)
         scene.background = {0.05f, 0.07f, 0.12f};
         scene.texture_filter = isin::Filter::bilinear;
         isin::add_model(scene, model);

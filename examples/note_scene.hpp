@@ -7,7 +7,7 @@
 namespace note_scene {
 
 template <class T>
-using Scene = isin::Scene<T, isin::Sphere, isin::Triangle, isin::TexturedTriangle>;
+using Scene = isin::StandardScene<T>; // compiled once in isin::io (ISIN_COMPILED)
 
 /// Builds the scene; `textured_floor = false` gives the floor a plain colour.
 template <class T>

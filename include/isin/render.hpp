@@ -20,6 +20,7 @@
 #include "camera.hpp"
 #include "color.hpp"
 #include "culling.hpp"
+#include "detail/compiled.hpp"
 #include "detail/parallel.hpp"
 #include "image.hpp"
 #include "offset.hpp"
@@ -383,3 +384,17 @@ template <class T, template <class> class... S>
 }
 
 } // namespace isin
+
+// The renderer of StandardScene<float> and <double> comes from isin::io where ISIN_COMPILED is
+// defined (detail/compiled.hpp).
+#if defined(ISIN_COMPILED)
+#define ISIN_DETAIL_RENDER(T)                                                                                          \
+    ISIN_DETAIL_COMPILED_HERE template isin::Image isin::render_rows(const isin::StandardScene<T>&,                    \
+                                                                     const isin::Camera<T>&, int, int,                 \
+                                                                     const isin::RenderOptions&, isin::RenderStats*);  \
+    ISIN_DETAIL_COMPILED_HERE template isin::Image isin::render(const isin::StandardScene<T>&, const isin::Camera<T>&, \
+                                                                const isin::RenderOptions&, isin::RenderStats*);
+ISIN_DETAIL_RENDER(float)
+ISIN_DETAIL_RENDER(double)
+#undef ISIN_DETAIL_RENDER
+#endif

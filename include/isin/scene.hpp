@@ -29,6 +29,7 @@
 #include "bvh.hpp"
 #include "color.hpp"
 #include "detail/attributes.hpp"
+#include "detail/compiled.hpp"
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "indexed_mesh.hpp"
@@ -937,4 +938,17 @@ private:
     std::shared_ptr<const BvhTree<T>> top_; // over instances_' boxes, from two placements on
 };
 
+/// A scene of every built-in kind. Its members and its renderer (render.hpp) are compiled once,
+/// for float and double, in isin::io (ISIN_COMPILED, detail/compiled.hpp): a file that uses it
+/// compiles the scene's setup, not its traversals; any other list of kinds is compiled where it
+/// is used.
+template <class T>
+using StandardScene = Scene<T, Sphere, Triangle, TexturedTriangle>;
+
 } // namespace isin
+
+// StandardScene's members come from isin::io where ISIN_COMPILED is defined (detail/compiled.hpp).
+#if defined(ISIN_COMPILED)
+ISIN_DETAIL_COMPILED_HERE template class isin::Scene<float, isin::Sphere, isin::Triangle, isin::TexturedTriangle>;
+ISIN_DETAIL_COMPILED_HERE template class isin::Scene<double, isin::Sphere, isin::Triangle, isin::TexturedTriangle>;
+#endif

@@ -11,7 +11,7 @@ int main(int argc, char** argv) {
     const auto hit = isin::intersect_moller_trumbore(cam.primary_ray(15.5f, 8.5f), blue);
     std::printf("t = %.1f\n", static_cast<double>(hit.t));
 
-    isin::Scene<float, isin::Sphere, isin::Triangle> scene;
+    isin::StandardScene<float> scene; // its members and renderer from isin::io where linked (ISIN_COMPILED)
     isin::Material<float> red;
     red.color = isin::from_rgb8<float>(255, 0, 0);
     scene.add(blue, scene.add_material(red));
@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
     for (const auto& p : image.pixels()) red_pixels += p.r > 0 && p.g == 0 && p.b == 0;
     std::printf("centre pixel (%d, %d, %d), %d red pixels\n", centre.r, centre.g, centre.b, red_pixels);
     const bool sphere = centre.r > 0 && centre.r == centre.g && centre.g == centre.b;
-    // A Bvh of its own: its builder comes from isin::io / isin-io (ISIN_COMPILED_BVH) or is compiled here.
+    // A Bvh of its own: its builder comes from isin::io / isin-io (ISIN_COMPILED) or is compiled here.
     const isin::Bvh<float> bvh(std::vector<isin::Triangle<float>>{blue});
     const bool bvh_hit = bvh.intersect(cam.primary_ray(15.5f, 8.5f)).primitive == 0;
     if (argc > 1) { // the file code: write and read back

@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "../detail/compiled.hpp"
 #include "../detail/huge_pages.hpp"
 #include "../detail/parallel.hpp"
 #include "box.hpp"
@@ -442,14 +443,11 @@ template <class T>
 
 } // namespace isin
 
-// The builder's core for float and double (binning, the binary tree, the collapse) is compiled
-// once, in isin::io, whose users see ISIN_COMPILED_BVH (CMake and pkg-config set it), rather than
-// in every file that builds a Bvh: about a second of -O2 compile time per file. Only the gather of
+// The builder's core for float and double (binning, the binary tree, the collapse) comes from
+// isin::io where ISIN_COMPILED is defined (detail/compiled.hpp), rather than being compiled in
+// every file that builds a Bvh: about a second of -O2 compile time per file. Only the gather of
 // each caller's boxes (build_bvh's box_of) is compiled where it is called.
-#if defined(ISIN_COMPILED_BVH) && defined(ISIN_IMPLEMENTATION)
-template class isin::detail::BvhBuilder<float>;
-template class isin::detail::BvhBuilder<double>;
-#elif defined(ISIN_COMPILED_BVH)
-extern template class isin::detail::BvhBuilder<float>;
-extern template class isin::detail::BvhBuilder<double>;
+#if defined(ISIN_COMPILED)
+ISIN_DETAIL_COMPILED_HERE template class isin::detail::BvhBuilder<float>;
+ISIN_DETAIL_COMPILED_HERE template class isin::detail::BvhBuilder<double>;
 #endif
