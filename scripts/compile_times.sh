@@ -5,8 +5,9 @@
 #                 writes a PNG; the file code, the scene's members and its renderer come from
 #                 isin::io, compiled once elsewhere)
 #   mesh_view     examples/mesh_view.cpp (loads a model into a StandardScene, renders it)
-#   io            the one file that compiles isin::io (ISIN_IMPLEMENTATION: the file code with stb
-#                 and tinyobjloader, the Bvh builder, StandardScene and its renderer)
+#   io-1, -2, -3  the three files of isin::io, compiled once per program (on as many cores as
+#                 there are): the file code with stb and tinyobjloader and the Bvh builder;
+#                 StandardScene<float> and its renderer; the same for double
 # with g++ and clang++ at -O0 and -O2 (-std=c++17, compile only), plus preprocessed lines and
 # the compiler's peak memory; then the first two with g++ and isin.hpp precompiled (what CMake's
 # target_precompile_headers(app PRIVATE <isin/isin.hpp>) does). Examples are compiled as CMake's
@@ -17,12 +18,16 @@ runs=${1:-5}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 printf '#include <isin/isin.hpp>\nint main() { return 0; }\n' > "$work/isin_only.cpp"
-printf '#define ISIN_IMPLEMENTATION\n#include <isin/isin.hpp>\n' > "$work/io.cpp" # as CMake's isin::io
+# isin::io's three files, as CMake writes them (include/isin/detail/compiled.hpp)
+printf '#define ISIN_IMPLEMENTATION\n#define ISIN_COMPILED_PART 1\n#include <isin/isin.hpp>\n' > "$work/io1.cpp"
+printf '#define ISIN_COMPILED_PART 2\n#include <isin/isin.hpp>\n' > "$work/io2.cpp"
+printf '#define ISIN_COMPILED_PART 3\n#include <isin/isin.hpp>\n' > "$work/io3.cpp"
 declare -A sources=([isin.hpp]="$work/isin_only.cpp" [notes_scene]=examples/notes_scene.cpp
-                    [mesh_view]=examples/mesh_view.cpp [io]="$work/io.cpp")
+                    [mesh_view]=examples/mesh_view.cpp [io-1]="$work/io1.cpp" [io-2]="$work/io2.cpp"
+                    [io-3]="$work/io3.cpp")
 median() { sort -n | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'; }
 printf '%-12s %-8s %-4s %9s %9s %10s\n' file compiler opt "median s" "peak MB" "lines"
-for name in isin.hpp notes_scene mesh_view io; do
+for name in isin.hpp notes_scene mesh_view io-1 io-2 io-3; do
   src=${sources[$name]}
   for cxx in g++ clang++; do
     lines=$($cxx -std=c++17 -DISIN_COMPILED -E -I include "$src" | grep -vc '^#' || true)

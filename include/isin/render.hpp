@@ -388,13 +388,12 @@ template <class T, template <class> class... S>
 // The renderer of StandardScene<float> and <double> comes from isin::io where ISIN_COMPILED is
 // defined (detail/compiled.hpp).
 #if defined(ISIN_COMPILED)
-#define ISIN_DETAIL_RENDER(T)                                                                                          \
-    ISIN_DETAIL_COMPILED_HERE template isin::Image isin::render_rows(const isin::StandardScene<T>&,                    \
-                                                                     const isin::Camera<T>&, int, int,                 \
-                                                                     const isin::RenderOptions&, isin::RenderStats*);  \
-    ISIN_DETAIL_COMPILED_HERE template isin::Image isin::render(const isin::StandardScene<T>&, const isin::Camera<T>&, \
-                                                                const isin::RenderOptions&, isin::RenderStats*);
-ISIN_DETAIL_RENDER(float)
-ISIN_DETAIL_RENDER(double)
+#define ISIN_DETAIL_RENDER(T, HERE)                                                                                    \
+    HERE template isin::Image isin::render_rows(const isin::StandardScene<T>&, const isin::Camera<T>&, int, int,       \
+                                                const isin::RenderOptions&, isin::RenderStats*);                       \
+    HERE template isin::Image isin::render(const isin::StandardScene<T>&, const isin::Camera<T>&,                      \
+                                           const isin::RenderOptions&, isin::RenderStats*);
+ISIN_DETAIL_RENDER(float, ISIN_DETAIL_COMPILED_FLOAT)
+ISIN_DETAIL_RENDER(double, ISIN_DETAIL_COMPILED_DOUBLE)
 #undef ISIN_DETAIL_RENDER
 #endif

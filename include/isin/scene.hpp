@@ -949,6 +949,6 @@ using StandardScene = Scene<T, Sphere, Triangle, TexturedTriangle>;
 
 // StandardScene's members come from isin::io where ISIN_COMPILED is defined (detail/compiled.hpp).
 #if defined(ISIN_COMPILED)
-ISIN_DETAIL_COMPILED_HERE template class isin::Scene<float, isin::Sphere, isin::Triangle, isin::TexturedTriangle>;
-ISIN_DETAIL_COMPILED_HERE template class isin::Scene<double, isin::Sphere, isin::Triangle, isin::TexturedTriangle>;
+ISIN_DETAIL_COMPILED_FLOAT template class isin::Scene<float, isin::Sphere, isin::Triangle, isin::TexturedTriangle>;
+ISIN_DETAIL_COMPILED_DOUBLE template class isin::Scene<double, isin::Sphere, isin::Triangle, isin::TexturedTriangle>;
 #endif

@@ -448,6 +448,6 @@ template <class T>
 // every file that builds a Bvh: about a second of -O2 compile time per file. Only the gather of
 // each caller's boxes (build_bvh's box_of) is compiled where it is called.
 #if defined(ISIN_COMPILED)
-ISIN_DETAIL_COMPILED_HERE template class isin::detail::BvhBuilder<float>;
-ISIN_DETAIL_COMPILED_HERE template class isin::detail::BvhBuilder<double>;
+ISIN_DETAIL_COMPILED_BUILDER template class isin::detail::BvhBuilder<float>;
+ISIN_DETAIL_COMPILED_BUILDER template class isin::detail::BvhBuilder<double>;
 #endif
