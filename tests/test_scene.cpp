@@ -330,15 +330,19 @@ int scene_stream_mismatches(const S& scene, const std::vector<isin::Ray<typename
     std::vector<isin::Hit<T>> hits(rays.size());
     std::vector<T> limit(rays.size());
     std::vector<std::uint8_t> blocked(rays.size(), 9);
+    std::vector<T> through(rays.size(), T(-1));
     for (std::size_t i = 0; i < rays.size(); ++i) limit[i] = T(20) + T(i % 37) * T(3);
     scene.intersect(rays.data(), rays.size(), hits.data(), culled);
     scene.occluded(rays.data(), rays.size(), limit.data(), blocked.data());
+    scene.transmittance(rays.data(), rays.size(), limit.data(), through.data());
     int mismatches = 0;
     for (std::size_t i = 0; i < rays.size(); ++i) {
         const auto one = scene.intersect(rays[i], std::numeric_limits<T>::infinity(), culled);
         mismatches += !same_scene_hit(hits[i], one);
         const bool shadow = scene.occluded(rays[i], limit[i]);
         mismatches += blocked[i] != (shadow ? 1 : 0);
+        const T light = scene.transmittance(rays[i], limit[i]);
+        mismatches += std::memcmp(&through[i], &light, sizeof light) != 0;
         // occluded is "anything in the way": what transmittance sees through nothing transparent
         mismatches += shadow != (scene.transmittance(rays[i], limit[i]) < T(1));
     }
@@ -347,7 +351,7 @@ int scene_stream_mismatches(const S& scene, const std::vector<isin::Ray<typename
 } // namespace
 
 TEST_CASE_TEMPLATE("scene stream: every kind, a Bvh kind, one placed mesh or several, culled or not: the single-ray "
-                   "hits bit for bit",
+                   "hits and transmittances bit for bit",
                    T, float, double) {
     using X = isin::Transform<T>;
     const auto ball = workloads::icosphere<T>({0, 4, 50}, 8.0, 3); // 1280 triangles: a Bvh
@@ -356,11 +360,14 @@ TEST_CASE_TEMPLATE("scene stream: every kind, a Bvh kind, one placed mesh or sev
         CAPTURE(placements);
         isin::Scene<T, isin::Sphere, isin::Triangle, isin::TexturedTriangle> scene;
         const auto m = scene.add_material({});
-        scene.add(isin::Sphere<T>{{-6, 2, 45}, 3}, m);
+        isin::Material<T> glass;
+        glass.transparency = T(0.6);
+        const auto g = scene.add_material(glass);
+        scene.add(isin::Sphere<T>{{-6, 2, 45}, 3}, g);
         scene.add(isin::Sphere<T>{{5, -3, 50}, T(2.5)}, m);
         for (const auto& tri : workloads::icosphere<T>({4, 3, 42}, 2.0, 2))
             scene.add(tri, m); // 320 triangles of the Triangle kind: its own Bvh
-        scene.add_textured_rectangle({-30, -12, 20}, {-30, -12, 90}, {30, -12, 20}, m);
+        scene.add_textured_rectangle({-30, -12, 20}, {-30, -12, 90}, {30, -12, 20}, g);
         if (placements > 0) {
             const auto id = scene.add_mesh(isin::Mesh<T>::from_triangles(ball), m);
             for (int k = 1; k < placements; ++k) scene.add_instance(id, X::translation({T(18 * k - 27), 0, 10}));
@@ -379,6 +386,51 @@ TEST_CASE_TEMPLATE("scene stream: every kind, a Bvh kind, one placed mesh or sev
         const auto culled = isin::backface_masks(scene, cam, isin::Culling::dot_product);
         CHECK(scene_stream_mismatches(scene, rays, &culled) == 0);
     }
+}
+
+TEST_CASE_TEMPLATE("scene stream: a scene too small for a Bvh (rays × objects in lanes): the single-ray results bit "
+                   "for bit, for camera rays and for secondary rays from the surfaces they hit",
+                   T, float, double) {
+    isin::Scene<T, isin::Sphere, isin::Triangle, isin::TexturedTriangle> scene; // the note's shapes (§5, §6, §10)
+    const auto m = scene.add_material({});
+    isin::Material<T> glass;
+    glass.transparency = T(0.7);
+    const auto g = scene.add_material(glass);
+    scene.add(isin::Triangle<T>{{0, 30, 40}, {40, -30, 120}, {-40, -30, 120}}, m);
+    scene.add(isin::Triangle<T>{{-50, 30, 124}, {50, 30, 124}, {0, -30, 44}}, g);
+    scene.add(isin::Triangle<T>{{-30, 0, 37}, {30, 40, 117}, {30, -40, 117}}, m);
+    scene.add(isin::Sphere<T>{{-78, -10, 170}, 35}, m);
+    scene.add(isin::Sphere<T>{{60, -29, 110}, 16}, g);
+    scene.add_textured_rectangle({-200, -45, 20}, {-200, -45, 1000}, {200, -45, 20}, m);
+    scene.commit();
+    CHECK_FALSE(scene.template has_bvh<isin::Triangle<T>>());
+    CHECK_FALSE(scene.template has_bvh<isin::Sphere<T>>());
+    const isin::Camera<T> cam{120, 68};
+    std::vector<isin::Ray<T>> rays, secondary;
+    for (int y = 0; y < cam.height(); ++y)
+        for (int x = 0; x < cam.width(); ++x) rays.push_back(cam.primary_ray(T(x), T(y)));
+    // From each hit: towards a light, mirrored, and on into the surface, each from the hit point
+    // itself (no offset: the hardest case for a filter) and from the offset origin.
+    const isin::Vertex<T> light{-60, 150, 40};
+    for (const auto& ray : rays) {
+        const auto h = scene.intersect(ray);
+        if (!h) continue;
+        const auto sp = scene.surface(ray, h);
+        const isin::Vertex<T> N = isin::dot(sp.normal, ray.direction) < T(0) ? sp.normal : -sp.normal;
+        const isin::Vertex<T> above = isin::offset_ray_origin({sp.point, sp.error}, N, N);
+        for (const isin::Vertex<T>& from : {sp.point, above}) {
+            secondary.push_back({from, light - from});
+            secondary.push_back({from, isin::reflect(ray.direction, N)});
+            secondary.push_back({from, ray.direction});
+        }
+    }
+    CHECK(secondary.size() > rays.size() * 3);
+    const isin::Vertex<T> zero{};
+    for (std::size_t i = 5; i < secondary.size(); i += 97) secondary[i].direction = zero;
+    CHECK(scene_stream_mismatches(scene, rays) == 0);
+    CHECK(scene_stream_mismatches(scene, secondary) == 0);
+    const auto culled = isin::backface_masks(scene, cam, isin::Culling::projected);
+    CHECK(scene_stream_mismatches(scene, rays, &culled) == 0);
 }
 
 TEST_CASE_TEMPLATE("scene: surface points carry error bounds that hold the exact surface (spheres, triangles, placed "

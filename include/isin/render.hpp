@@ -221,7 +221,8 @@ Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shadi
 // One 4×4 tile of pixels (fewer at the image's edges), one sample position of each: the primary
 // rays through the scene's stream intersect (packets), their shadow rays light by light through
 // the stream occluded when nothing in the scene is transparent (then transmittance is 0 or 1),
-// else one by one; each pixel's colour is added to sum[] exactly as trace() computes it.
+// else through the stream transmittance; each pixel's colour is added to sum[] exactly as
+// trace() computes it.
 template <class T, template <class> class... S>
 void trace_tile(const Scene<T, S...>& scene, const Ray<T> (&rays)[16], int n, bool opaque, const RenderOptions& opt,
                 RenderStats& stats, const typename Scene<T, S...>::Culled* skip, Color<T> (&sum)[16]) {
@@ -248,14 +249,16 @@ void trace_tile(const Scene<T, S...>& scene, const Ray<T> (&rays)[16], int n, bo
             continue;
         }
         stats.shadow += std::uint64_t(m);
+        const T one[16] = {T(1), T(1), T(1), T(1), T(1), T(1), T(1), T(1),
+                           T(1), T(1), T(1), T(1), T(1), T(1), T(1), T(1)};
         if (opaque) {
-            const T one[16] = {T(1), T(1), T(1), T(1), T(1), T(1), T(1), T(1),
-                               T(1), T(1), T(1), T(1), T(1), T(1), T(1), T(1)};
             std::uint8_t blocked[16];
             scene.occluded(shadow, std::size_t(m), one, blocked);
             for (int i = 0; i < m; ++i) add_light(s[lit[i]], light, L[i], blocked[i] ? T(0) : T(1));
         } else {
-            for (int i = 0; i < m; ++i) add_light(s[lit[i]], light, L[i], scene.transmittance(shadow[i], T(1)));
+            T visible[16];
+            scene.transmittance(shadow, std::size_t(m), one, visible);
+            for (int i = 0; i < m; ++i) add_light(s[lit[i]], light, L[i], visible[i]);
         }
     }
     for (int i = 0; i < count; ++i) sum[shaded[i]] += end_shading(scene, rays[shaded[i]], s[shaded[i]], 0, opt, stats);

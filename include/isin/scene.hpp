@@ -34,6 +34,7 @@
 #include "hit.hpp"
 #include "indexed_mesh.hpp"
 #include "ray.hpp"
+#include "ray_lanes.hpp"
 #include "shading.hpp"
 #include "sphere.hpp"
 #include "texture.hpp"
@@ -155,6 +156,23 @@ template <class T>
 [[nodiscard]] constexpr const Triangle<T>* triangle_of(const Sphere<T>&) noexcept {
     return nullptr;
 }
+
+/// Which rays of a block may hit the primitive (optional customisation point, ray_lanes.hpp): a
+/// kind that has it is tested rays × primitives in lanes by the stream calls of a scene too small
+/// for its Bvh, each kept ray then by intersect_primitive. Textured triangles as their triangle.
+template <class T>
+[[nodiscard]] inline std::uint64_t may_hit(const RayLanes<T>& lanes, const TexturedTriangle<T>& tri) noexcept {
+    return may_hit(lanes, tri.triangle);
+}
+
+namespace detail {
+template <class T, class Shape, class = void>
+struct has_lane_filter : std::false_type {};
+template <class T, class Shape>
+struct has_lane_filter<T, Shape,
+                       std::void_t<decltype(may_hit(std::declval<const RayLanes<T>&>(), std::declval<const Shape&>()))>>
+    : std::true_type {};
+} // namespace detail
 
 /// Whether a primitive kind is a triangle: a Bvh of it tests blocks of 8 with the watertight
 /// test, and a TriangleBatch can hold it.
@@ -526,35 +544,47 @@ public:
     /// which it stops). Every kind and placed mesh goes through its Bvh's all-hits traversal.
     [[nodiscard]] T transmittance(const Ray<T>& ray, T t_max) const {
         T through = T(1);
-        // Multiplies in the transparency of material m; false once nothing gets through.
-        const auto pass = [&](std::uint32_t m) {
-            through *= material(m).transparency;
-            return through > T(0);
-        };
         for_each_kind([&](auto kind, const auto& vec) {
-            using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
-            if (!(through > T(0))) return;
-            const auto& accel = std::get<kind>(accel_);
-            if constexpr (is_triangle_kind<Shape>::value) {
-                if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) {
-                    accel.triangles->for_each_hit(
-                        ray, t_max, [&](std::uint32_t i, const Hit<T>&) { return pass(vec[i].material); });
-                    return;
-                }
-                if (accel.batch && uses(Acceleration::batch, kind, vec.size())) {
-                    accel.batch->each_hit(ray, t_max, [&](std::size_t i, T) { return pass(vec[i].material); });
-                    return;
-                }
-            } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
-                through *= tree_transmittance(*accel.objects, vec, ray, t_max);
-                return;
-            }
-            for (std::size_t i = 0; i < vec.size() && through > T(0); ++i)
-                if (intersect_primitive(ray, vec[i].shape, triangle_method).t < t_max) (void)pass(vec[i].material);
+            if (through > T(0)) transmit_kind(kind, vec, ray, t_max, through);
         });
         if (!(through > T(0))) return T(0);
         if (!instances_.empty()) through *= placements_transmittance(ray, t_max);
         return through > T(0) ? through : T(0);
+    }
+    /// Shadow rays of a stream: through[i] = transmittance(rays[i], t_max[i]) for i < count, the
+    /// same values bit for bit. Kinds too small for a Bvh are tested rays × objects in lanes
+    /// (ray_lanes.hpp), the rest ray by ray.
+    void transmittance(const Ray<T>* rays, std::size_t count, const T* t_max, T* through) const {
+        RayLanes<T> lanes;
+        for (std::size_t first = 0; first < count; first += stream_chunk) {
+            const std::size_t n = std::min(stream_chunk, count - first);
+            const Ray<T>* r = rays + first;
+            const T* limit = t_max + first;
+            T* out = through + first;
+            for (std::size_t k = 0; k < n; ++k) out[k] = T(1);
+            bool lanes_set = false;
+            for_each_kind([&](auto kind, const auto& vec) {
+                if (!in_lanes(kind, vec, false)) {
+                    for (std::size_t k = 0; k < n; ++k)
+                        if (out[k] > T(0)) transmit_kind(kind, vec, r[k], limit[k], out[k]);
+                    return;
+                }
+                if (!lanes_set) lanes.assign(r, n), lanes_set = true;
+                std::uint64_t open = 0; // rays that light still gets through
+                for (std::size_t k = 0; k < n; ++k) open |= std::uint64_t(out[k] > T(0)) << k;
+                for (std::size_t i = 0; i < vec.size() && open; ++i)
+                    for (std::uint64_t maybe = lane_filter(lanes, vec[i].shape) & open; maybe; maybe &= maybe - 1) {
+                        const int k = detail::lowest_bit(maybe);
+                        if (!(intersect_primitive(r[k], vec[i].shape, triangle_method).t < limit[k])) continue;
+                        out[k] *= material(vec[i].material).transparency;
+                        if (!(out[k] > T(0))) open &= ~(std::uint64_t(1) << k);
+                    }
+            });
+            for (std::size_t k = 0; k < n; ++k) {
+                if (out[k] > T(0) && !instances_.empty()) out[k] *= placements_transmittance(r[k], limit[k]);
+                if (!(out[k] > T(0))) out[k] = T(0);
+            }
+        }
     }
 
     /// Point, normals, material, texture coordinates and colour of a hit of `ray`.
@@ -713,8 +743,70 @@ private:
         return false;
     }
 
+    // Multiplies `through` (> 0) by the transparencies of the objects of kind `kind` that `ray`
+    // crosses before t_max, in their order, down to 0 at the first opaque one (transmittance).
+    template <class Kind, class Objects>
+    void transmit_kind(Kind kind, const Objects& vec, const Ray<T>& ray, T t_max, T& through) const {
+        using Shape = typename Objects::value_type::shape_type;
+        // Multiplies in the transparency of material m; false once nothing gets through.
+        const auto pass = [&](std::uint32_t m) {
+            through *= material(m).transparency;
+            return through > T(0);
+        };
+        const auto& accel = std::get<kind>(accel_);
+        if constexpr (is_triangle_kind<Shape>::value) {
+            if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) {
+                accel.triangles->for_each_hit(ray, t_max,
+                                              [&](std::uint32_t i, const Hit<T>&) { return pass(vec[i].material); });
+                return;
+            }
+            if (accel.batch && uses(Acceleration::batch, kind, vec.size())) {
+                accel.batch->each_hit(ray, t_max, [&](std::size_t i, T) { return pass(vec[i].material); });
+                return;
+            }
+        } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
+            through *= tree_transmittance(*accel.objects, vec, ray, t_max);
+            return;
+        }
+        for (std::size_t i = 0; i < vec.size() && through > T(0); ++i)
+            if (intersect_primitive(ray, vec[i].shape, triangle_method).t < t_max) (void)pass(vec[i].material);
+    }
+
+    // may_hit for a kind that has it; every ray for one that has not (in_lanes keeps such kinds
+    // out of the lanes: this only lets the stream loops compile for them).
+    template <class Shape>
+    [[nodiscard]] static std::uint64_t lane_filter(const RayLanes<T>& lanes, const Shape& shape) noexcept {
+        if constexpr (detail::has_lane_filter<T, Shape>::value) {
+            return may_hit(lanes, shape);
+        } else {
+            (void)shape;
+            return lanes.count >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << lanes.count) - 1;
+        }
+    }
+
+    // Whether the stream calls test kind `kind` rays × objects in lanes: where the single-ray
+    // calls test its objects one after another (no Bvh; no batch, which a mask turns off for
+    // nearest hits) and the kind has a lane filter (may_hit; triangles by Möller–Trumbore).
+    template <class Kind, class Objects>
+    [[nodiscard]] bool in_lanes(Kind kind, const Objects& vec, bool masked) const noexcept {
+        using Shape = typename Objects::value_type::shape_type;
+        if constexpr (!detail::has_lane_filter<T, Shape>::value) {
+            return false;
+        } else {
+            const auto& accel = std::get<kind>(accel_);
+            if constexpr (is_triangle_kind<Shape>::value) {
+                if (triangle_method != TriangleMethod::moller_trumbore) return false;
+                if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) return false;
+                return !(accel.batch && !masked && uses(Acceleration::batch, kind, vec.size()));
+            } else {
+                return !(accel.objects && uses(Acceleration::bvh, kind, vec.size()));
+            }
+        }
+    }
+
     // Rays of a stream are taken this many at a time (their state lives on the stack).
     static constexpr std::size_t stream_chunk = 64;
+    static_assert(stream_chunk <= RayLanes<T>::capacity, "a chunk of rays fits one block of lanes");
 
     // The stream intersect: kind by kind as intersect does, so that each ray meets the same
     // bounds in the same order and ends with the same hit.
@@ -723,18 +815,37 @@ private:
         Ray<T> rays[stream_chunk];
         T t[stream_chunk];
         Hit<T> found[stream_chunk];
+        RayLanes<T> lanes;
         for (std::size_t first = 0; first < count; first += stream_chunk) {
             const std::size_t n = std::min(stream_chunk, count - first);
             Hit<T>* best = hits + first;
             for (std::size_t k = 0; k < n; ++k)
                 rays[k] = ray_at(first + k), t[k] = std::numeric_limits<T>::infinity(), best[k] = Hit<T>{};
+            bool lanes_set = false;
             for_each_kind([&](auto kind, const auto& vec) {
                 using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
                 const auto& accel = std::get<kind>(accel_);
+                const std::uint8_t* mask =
+                    culled && !culled->objects[kind].empty() ? culled->objects[kind].data() : nullptr;
+                if (in_lanes(kind, vec, mask != nullptr)) { // as nearest_of_kind's loop, without certain misses
+                    if (!lanes_set) lanes.assign(rays, n), lanes_set = true;
+                    for (std::size_t i = 0; i < vec.size(); ++i) {
+                        if (mask && mask[i]) continue;
+                        for (std::uint64_t maybe = lane_filter(lanes, vec[i].shape); maybe; maybe &= maybe - 1) {
+                            const int k = detail::lowest_bit(maybe);
+                            const Hit<T> h = intersect_primitive(rays[k], vec[i].shape, triangle_method);
+                            if (!(h.t < t[k])) continue;
+                            t[k] = h.t, best[k] = h;
+                            best[k].primitive = static_cast<std::uint32_t>(i);
+                            best[k].geometry = static_cast<std::uint32_t>(kind);
+                        }
+                    }
+                    return;
+                }
                 if constexpr (is_triangle_kind<Shape>::value) {
                     if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) {
                         HitFilter filter;
-                        if (culled && !culled->objects[kind].empty()) filter.skip = culled->objects[kind].data();
+                        filter.skip = mask;
                         accel.triangles->intersect(rays, n, t, found, filter);
                         for (std::size_t k = 0; k < n; ++k)
                             if (found[k].t < t[k])
@@ -769,7 +880,9 @@ private:
         Ray<T> rays[stream_chunk];
         T limit[stream_chunk];
         std::uint8_t hit[stream_chunk];
+        RayLanes<T> lanes;
         for (std::size_t first = 0; first < count; first += stream_chunk) {
+            bool lanes_set = false;
             const std::size_t n = std::min(stream_chunk, count - first);
             std::uint8_t* out = blocked + first;
             for (std::size_t k = 0; k < n; ++k) rays[k] = ray_at(first + k), limit[k] = t_max[first + k], out[k] = 0;
@@ -785,6 +898,19 @@ private:
                 if constexpr (is_triangle_kind<Shape>::value) {
                     if (accel.triangles && uses(Acceleration::bvh, kind, vec.size()))
                         return through_bvh(*accel.triangles, rays);
+                }
+                if (in_lanes(kind, vec, false)) { // as occluded_by_kind's loop, without certain misses
+                    if (!lanes_set) lanes.assign(rays, n), lanes_set = true;
+                    std::uint64_t open = 0; // rays not blocked yet
+                    for (std::size_t k = 0; k < n; ++k) open |= std::uint64_t(out[k] == 0) << k;
+                    for (std::size_t i = 0; i < vec.size() && open; ++i)
+                        for (std::uint64_t maybe = lane_filter(lanes, vec[i].shape) & open; maybe; maybe &= maybe - 1) {
+                            const int k = detail::lowest_bit(maybe);
+                            if (!(intersect_primitive(rays[k], vec[i].shape, triangle_method).t < limit[k])) continue;
+                            out[k] = 1;
+                            open &= ~(std::uint64_t(1) << k);
+                        }
+                    return;
                 }
                 for (std::size_t k = 0; k < n; ++k)
                     if (!out[k]) out[k] = occluded_by_kind(kind, vec, rays[k], limit[k]) ? 1 : 0;

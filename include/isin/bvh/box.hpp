@@ -2,6 +2,7 @@
 /// isin — axis-aligned boxes: what a Bvh is built from (a primitive's bounds) and what its nodes
 /// hold; plus the lane types the build and traversal use.
 #include <algorithm>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <type_traits>
@@ -58,10 +59,15 @@ struct Box {
 
 namespace detail {
 
-/// Index of the lowest set bit of a non-zero mask.
-inline int lowest_bit(unsigned mask) noexcept {
+/// Index of the lowest set bit of a non-zero mask (unsigned, or 64 bits).
+template <class Mask>
+inline int lowest_bit(Mask mask) noexcept {
+    static_assert(std::is_same_v<Mask, unsigned> || std::is_same_v<Mask, std::uint64_t>, "a mask of 32 or 64 bits");
 #if ISIN_VECTOR_EXTENSIONS
-    return __builtin_ctz(mask);
+    if constexpr (sizeof(Mask) == 8)
+        return __builtin_ctzll(mask);
+    else
+        return __builtin_ctz(mask);
 #else
     int k = 0;
     while (!((mask >> k) & 1u)) ++k;
