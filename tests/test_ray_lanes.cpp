@@ -85,17 +85,18 @@ TEST_CASE_TEMPLATE("ray lanes: may_hit keeps every ray Möller–Trumbore hits: 
             default: break;
             }
             const isin::Vertex<T> p = at_barycentrics(tri, b1, b2);
-            rays.push_back({eye, p - eye});                                   // from the eye
-            rays.push_back({p, random_point<T>(rng, T(1))});                  // from the surface
-            rays.push_back({p - (tri.v1 - tri.v0) * T(2), tri.v1 - tri.v0});  // along the plane
-            rays.push_back({eye, (p - eye) * T(1e-30)});                      // tiny direction
-            rays.push_back({eye * T(1e3), p - eye * T(1e3)});                 // from far away
+            rays.push_back({eye, p - eye});                                  // from the eye
+            rays.push_back({p, random_point<T>(rng, T(1))});                 // from the surface
+            rays.push_back({p - (tri.v1 - tri.v0) * T(2), tri.v1 - tri.v0}); // along the plane
+            rays.push_back({eye, (p - eye) * T(1e-30)});                     // tiny direction
+            rays.push_back({eye * T(1e3), p - eye * T(1e3)});                // from far away
         }
         rays.push_back({eye, {0, 0, 0}});
         rays.push_back({eye, {nan, 1, 0}});
         rays.push_back({{nan, 0, 0}, {0, 0, 1}});
         rays.push_back({eye, {inf, 1, 0}});
-        tally(rays, tri, [&](const isin::Ray<T>& r) { return bool(isin::intersect_moller_trumbore(r, tri)); }, total);
+        tally(
+            rays, tri, [&](const isin::Ray<T>& r) { return bool(isin::intersect_moller_trumbore(r, tri)); }, total);
     }
     CAPTURE(total.rays);
     CAPTURE(total.hits);
@@ -124,7 +125,8 @@ TEST_CASE_TEMPLATE("ray lanes: may_hit keeps every ray the §6 sphere test hits:
             rays.push_back({on + T(100) * r * n, -n});                                // head on
             rays.push_back({on + T(100) * r * n, n});                                 // away
         }
-        tally(rays, sp, [&](const isin::Ray<T>& ray) { return bool(isin::intersect(ray, sp)); }, total);
+        tally(
+            rays, sp, [&](const isin::Ray<T>& ray) { return bool(isin::intersect(ray, sp)); }, total);
     }
     CAPTURE(total.rays);
     CAPTURE(total.hits);
@@ -146,8 +148,8 @@ TEST_CASE_TEMPLATE("ray lanes: may_hit drops rays that clearly miss (1% outside 
             const long double b1 = -0.01L, b2 = unit(rng);
             rays.push_back({eye, at_barycentrics(tri, k % 2 ? b1 : b2, k % 2 ? b2 : b1) - eye});
         }
-        tally(rays, tri, [&](const isin::Ray<T>& r) { return bool(isin::intersect_moller_trumbore(r, tri)); },
-              tri_total);
+        tally(
+            rays, tri, [&](const isin::Ray<T>& r) { return bool(isin::intersect_moller_trumbore(r, tri)); }, tri_total);
         const isin::Sphere<T> sp{random_point<T>(rng, offset), size};
         rays.clear();
         for (int k = 0; k < 64; ++k) {
@@ -155,7 +157,8 @@ TEST_CASE_TEMPLATE("ray lanes: may_hit drops rays that clearly miss (1% outside 
             const isin::Vertex<T> side = isin::normalize(isin::cross(n, random_point<T>(rng, T(1))));
             rays.push_back({sp.center + T(1.01) * size * side + T(10) * size * n, -n}); // passes 1% aside
         }
-        tally(rays, sp, [&](const isin::Ray<T>& ray) { return bool(isin::intersect(ray, sp)); }, sphere_total);
+        tally(
+            rays, sp, [&](const isin::Ray<T>& ray) { return bool(isin::intersect(ray, sp)); }, sphere_total);
     }
     CHECK(tri_total.hits == 0);
     CHECK(sphere_total.hits == 0);

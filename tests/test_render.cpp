@@ -528,6 +528,25 @@ TEST_CASE_TEMPLATE("render: tiles of 4×4 pixels through the stream calls give e
     CHECK(render_is_trace_per_pixel(note, small, opt));
     opt.samples = 2, opt.culling = isin::Culling::projected;
     CHECK(render_is_trace_per_pixel(note, small, opt));
+    opt.samples = 1, opt.culling = isin::Culling::none;
+    // Two facing mirrors, half glass: rays bounce to max_depth, past the depth where secondary
+    // rays stop going as streams (detail::stream_depth) and go one by one.
+    isin::Scene<T, isin::Triangle> mirrors;
+    isin::Material<T> mirror;
+    mirror.reflectivity = T(0.6), mirror.transparency = T(0.3), mirror.color = {T(0.2), T(0.5), T(0.9)};
+    const auto mm = mirrors.add_material(mirror);
+    const T side = 1000;
+    mirrors.add(isin::Triangle<T>{{-side, -side, 10}, {-side, side, 10}, {side, -side, 10}}, mm);
+    mirrors.add(isin::Triangle<T>{{side, -side, 10}, {-side, side, 10}, {side, side, 10}}, mm);
+    mirrors.add(isin::Triangle<T>{{-side, -side, -10}, {side, -side, -10}, {-side, side, -10}}, mm);
+    mirrors.add(isin::Triangle<T>{{side, -side, -10}, {side, side, -10}, {-side, side, -10}}, mm);
+    mirrors.add_light({{1, 2, 0}});
+    opt.max_depth = isin::detail::stream_depth + 3;
+    isin::RenderStats stats;
+    (void)isin::render(mirrors, isin::Camera<T>{13, 7}, opt, &stats);
+    CHECK(stats.reflection >= std::uint64_t(13 * 7 * opt.max_depth));
+    CHECK(render_is_trace_per_pixel(mirrors, isin::Camera<T>{13, 7}, opt));
+    opt.max_depth = 4;
     // An opaque scene with a placed mesh and a Bvh kind: packets for primary and shadow rays.
     isin::Scene<T, isin::Sphere, isin::Triangle> opaque;
     isin::Material<T> matte;

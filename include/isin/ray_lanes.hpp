@@ -117,10 +117,10 @@ template <class T>
         const T px = dy * e2.z - dz * e2.y; // MT: P = Rd × E2
         const T py = dz * e2.x - dx * e2.z;
         const T pz = dx * e2.y - dy * e2.x;
-        const T det = e1.x * px + e1.y * py + e1.z * pz;                                 // MT: det = E1·P
+        const T det = e1.x * px + e1.y * py + e1.z * pz;                                // MT: det = E1·P
         const T sx = lanes.ox[i] - v0x, sy = lanes.oy[i] - v0y, sz = lanes.oz[i] - v0z; // MT: S = Ro − V0
-        const T U = sx * px + sy * py + sz * pz;                                         // MT: u·det = S·P
-        const T qx = sy * e1.z - sz * e1.y;                                              // MT: Q = S × E1
+        const T U = sx * px + sy * py + sz * pz;                                        // MT: u·det = S·P
+        const T qx = sy * e1.z - sz * e1.y;                                             // MT: Q = S × E1
         const T qy = sz * e1.x - sx * e1.z;
         const T qz = sx * e1.y - sy * e1.x;
         const T V = dx * qx + dy * qy + dz * qz;       // MT: v·det = Rd·Q
@@ -133,8 +133,8 @@ template <class T>
         const T abs_det = std::fabs(det), u = U * sign, v = V * sign, t = W * sign;
         const T sum_slack = T(4) * std::numeric_limits<T>::epsilon() * (std::fabs(u) + std::fabs(v) + abs_det);
         // Comparisons that a NaN fails keep the ray.
-        const bool out = (u < -tol_u) | (v < -tol_v) | (t < -tol_t) |
-                         (u + v > abs_det + (tol_u + tol_v + tol_det + sum_slack));
+        const bool out =
+            (u < -tol_u) | (v < -tol_v) | (t < -tol_t) | (u + v > abs_det + (tol_u + tol_v + tol_det + sum_slack));
         keep[i] = !((abs_det > tol_det) & out);
     }
     return lanes.bits(keep);
@@ -157,8 +157,8 @@ template <class T>
         const T a = dx * dx + dy * dy + dz * dz;
         const T inv_a = T(1) / a;
         const T lx = cx - lanes.ox[i], ly = cy - lanes.oy[i], lz = cz - lanes.oz[i]; // §6: l = C − Ro
-        const T s = (lx * dx + ly * dy + lz * dz) * inv_a;                          // §6: s = l·Rd
-        const T l2 = lx * lx + ly * ly + lz * lz;                                   // §6: l2 = l·l
+        const T s = (lx * dx + ly * dy + lz * dz) * inv_a;                           // §6: s = l·Rd
+        const T l2 = lx * lx + ly * ly + lz * lz;                                    // §6: l2 = l·l
         const T mx = lx - s * dx, my = ly - s * dy, mz = lz - s * dz;
         const T m2 = mx * mx + my * my + mz * mz; // §6: m2 = |l − s·Rd|²
         const T ld = std::fabs(lx * dx) + std::fabs(ly * dy) + std::fabs(lz * dz);

@@ -186,19 +186,23 @@ template <class T, template <class> class... S>
 }
 
 namespace detail {
-// The shaded point's colour: its local colour, and the reflected and transmitted rays (§8).
-template <class T, template <class> class... S>
-Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shading<T>& s, int depth,
-                     const RenderOptions& opt, RenderStats& stats) {
+// The reflected and transmitted rays of a shaded point (§8), where its material has them.
+template <class T>
+struct Secondary {
+    bool reflects = false, transmits = false;
+    Ray<T> reflected, transmitted;
+};
+
+template <class T>
+Secondary<T> secondary_rays(const Ray<T>& ray, const Shading<T>& s, RenderStats& stats) noexcept {
     const Material<T>& m = *s.m;
-    if (depth >= opt.max_depth || (m.reflectivity <= T(0) && m.transparency <= T(0))) return s.local;
     const Vertex<T>& d = ray.direction;
-    Color<T> result = std::max(T(0), T(1) - m.reflectivity - m.transparency) * s.local;
+    Secondary<T> out;
     if (m.reflectivity > T(0)) { // §8: Rd − 2(Rd·N)N from the hit point
         ++stats.reflection;
         Vertex<T> mirrored = reflect(d, s.Ns);
         if (!(dot(mirrored, s.Nf) > T(0))) mirrored = reflect(d, s.Nf); // a shading normal must not send it inside
-        result += m.reflectivity * trace(scene, Ray<T>{s.above, mirrored}, depth + 1, opt, stats);
+        out.reflects = true, out.reflected = {s.above, mirrored};
     }
     if (m.transparency > T(0)) { // §8: straight through (ior = 1) or bent by Snell's law
         Vertex<T> dir = d;
@@ -213,26 +217,59 @@ Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shadi
         ++stats.refraction;
         const Vertex<T> origin =
             reflected ? s.above : offset_ray_origin(BoundedPoint<T>{s.sp.point, s.sp.error}, s.Nf, -s.Nf);
-        result += m.transparency * trace(scene, Ray<T>{origin, dir}, depth + 1, opt, stats);
+        out.transmits = true, out.transmitted = {origin, dir};
     }
+    return out;
+}
+
+// Whether a shaded point at `depth` sends secondary rays (else its colour is its local colour).
+template <class T>
+bool has_secondary(const Shading<T>& s, int depth, const RenderOptions& opt) noexcept {
+    return depth < opt.max_depth && (s.m->reflectivity > T(0) || s.m->transparency > T(0));
+}
+
+// The colour of a point with secondary rays: its local colour and what they brought back (§8).
+template <class T>
+Color<T> mix_secondary(const Shading<T>& s, const Color<T>& reflected, const Color<T>& transmitted) noexcept {
+    const Material<T>& m = *s.m;
+    Color<T> result = std::max(T(0), T(1) - m.reflectivity - m.transparency) * s.local;
+    if (m.reflectivity > T(0)) result += m.reflectivity * reflected;
+    if (m.transparency > T(0)) result += m.transparency * transmitted;
     return result;
 }
 
-// One 4×4 tile of pixels (fewer at the image's edges), one sample position of each: the primary
-// rays through the scene's stream intersect (packets), their shadow rays light by light through
-// the stream occluded when nothing in the scene is transparent (then transmittance is 0 or 1),
-// else through the stream transmittance; each pixel's colour is added to sum[] exactly as
-// trace() computes it.
+// The shaded point's colour: its local colour, and the reflected and transmitted rays (§8).
 template <class T, template <class> class... S>
-void trace_tile(const Scene<T, S...>& scene, const Ray<T> (&rays)[16], int n, bool opaque, const RenderOptions& opt,
-                RenderStats& stats, const typename Scene<T, S...>::Culled* skip, Color<T> (&sum)[16]) {
+Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shading<T>& s, int depth,
+                     const RenderOptions& opt, RenderStats& stats) {
+    if (!has_secondary(s, depth, opt)) return s.local;
+    const Secondary<T> next = secondary_rays(ray, s, stats);
+    Color<T> reflected{}, transmitted{};
+    if (next.reflects) reflected = trace(scene, next.reflected, depth + 1, opt, stats);
+    if (next.transmits) transmitted = trace(scene, next.transmitted, depth + 1, opt, stats);
+    return mix_secondary(s, reflected, transmitted);
+}
+
+// Secondary rays go as streams down to this depth, then one by one (trace()): each level keeps
+// its rays' shading on the stack.
+constexpr int stream_depth = 8;
+
+// Up to 16 rays at `depth` (a 4×4 tile of primary rays at depth 0, which `skip` culls), each
+// pixel's colour into out[] exactly as trace() computes it: the rays through the scene's stream
+// intersect (packets), their shadow rays light by light through the stream occluded when
+// nothing in the scene is transparent (then transmittance is 0 or 1), else through the stream
+// transmittance; their reflected and transmitted rays as streams of their own.
+template <class T, template <class> class... S>
+void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int depth, bool opaque,
+                  const RenderOptions& opt, RenderStats& stats, const typename Scene<T, S...>::Culled* skip,
+                  Color<T>* out) {
     Hit<T> hits[16];
     scene.intersect(rays, std::size_t(n), hits, skip);
     Shading<T> s[16];
     int shaded[16], count = 0;
     for (int k = 0; k < n; ++k) {
         if (!hits[k]) {
-            sum[k] += scene.background;
+            out[k] = scene.background;
             continue;
         }
         s[k] = begin_shading(scene, rays[k], hits[k]);
@@ -261,7 +298,36 @@ void trace_tile(const Scene<T, S...>& scene, const Ray<T> (&rays)[16], int n, bo
             for (int i = 0; i < m; ++i) add_light(s[lit[i]], light, L[i], visible[i]);
         }
     }
-    for (int i = 0; i < count; ++i) sum[shaded[i]] += end_shading(scene, rays[shaded[i]], s[shaded[i]], 0, opt, stats);
+    // §8: the reflected and the transmitted rays of every point that has them, as two streams.
+    Ray<T> next[2][16];
+    int counts[2] = {0, 0}, slot[2][16];
+    for (int i = 0; i < count; ++i) {
+        const int k = shaded[i];
+        if (!has_secondary(s[k], depth, opt)) {
+            out[k] = s[k].local;
+            continue;
+        }
+        const Secondary<T> sec = secondary_rays(rays[k], s[k], stats);
+        slot[0][k] = slot[1][k] = -1;
+        if (sec.reflects) slot[0][k] = counts[0], next[0][counts[0]++] = sec.reflected;
+        if (sec.transmits) slot[1][k] = counts[1], next[1][counts[1]++] = sec.transmitted;
+    }
+    if (counts[0] + counts[1] == 0) return;
+    Color<T> back[2][16];
+    for (int j = 0; j < 2; ++j) {
+        if (counts[j] == 0) continue;
+        if (depth + 1 < stream_depth)
+            trace_stream(scene, next[j], counts[j], depth + 1, opaque, opt, stats, nullptr, back[j]);
+        else
+            for (int i = 0; i < counts[j]; ++i) back[j][i] = trace(scene, next[j][i], depth + 1, opt, stats);
+    }
+    for (int i = 0; i < count; ++i) {
+        const int k = shaded[i];
+        if (!has_secondary(s[k], depth, opt)) continue;
+        const Color<T> none{};
+        out[k] = mix_secondary(s[k], slot[0][k] >= 0 ? back[0][slot[0][k]] : none,
+                               slot[1][k] >= 0 ? back[1][slot[1][k]] : none);
+    }
 }
 } // namespace detail
 
@@ -344,10 +410,13 @@ template <class T, template <class> class... S>
                             rays[k] = camera.primary_ray(px, py); // §3
                         }
                         local.primary += std::uint64_t(n);
-                        detail::trace_tile(scene, rays, n, opaque, opt, local, skip, sum);
+                        Color<T> colour[16];
+                        detail::trace_stream(scene, rays, n, 0, opaque, opt, local, skip, colour);
+                        for (int k = 0; k < n; ++k) sum[k] += colour[k];
                     }
                 for (int k = 0; k < n; ++k)
-                    image(x0 + k % tile_w, row0 + k / tile_w) = to_rgb8(sum[k] / T(N * N), opt.encoding);
+                    image(x0 + k % tile_w, row0 + k / tile_w) =
+                        to_rgb8(N == 1 ? sum[k] : sum[k] / T(N * N), opt.encoding); // x/1 = x
             }
             const int done = rows_done.fetch_add(band_rows) + band_rows;
             if (reporter && show_progress) {

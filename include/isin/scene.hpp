@@ -507,7 +507,7 @@ public:
     /// rays through the Bvh's stream call (16 coherent rays as a packet: order them in 4×4 tiles
     /// of pixels); everything else goes one ray at a time.
     void intersect(const Ray<T>* rays, std::size_t count, Hit<T>* hits, const Culled* culled = nullptr) const {
-        stream_nearest([rays](std::size_t i) { return rays[i]; }, count, hits, culled);
+        stream_nearest(RayArray{rays}, count, hits, culled);
     }
     /// As above, the rays as separate arrays.
     void intersect(const RaysSoA<T>& rays, std::size_t count, Hit<T>* hits, const Culled* culled = nullptr) const {
@@ -532,7 +532,7 @@ public:
     /// Shadow rays of a stream: blocked[i] = occluded(rays[i], t_max[i]) (1 or 0) for i < count;
     /// packets as for the stream intersect.
     void occluded(const Ray<T>* rays, std::size_t count, const T* t_max, std::uint8_t* blocked) const {
-        stream_occluded([rays](std::size_t i) { return rays[i]; }, count, t_max, blocked);
+        stream_occluded(RayArray{rays}, count, t_max, blocked);
     }
     /// As above, the rays as separate arrays.
     void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked) const {
@@ -804,6 +804,23 @@ private:
         }
     }
 
+    // The rays of a stream given as one array: read in place (the other forms are copied).
+    struct RayArray {
+        const Ray<T>* rays;
+        Ray<T> operator()(std::size_t i) const noexcept { return rays[i]; }
+    };
+    // rays[first, first + n) of a stream: in place for an array, else copied into `copy`.
+    template <class RayAt>
+    static const Ray<T>* chunk_of(const RayAt& ray_at, std::size_t first, std::size_t n, Ray<T>* copy) {
+        if constexpr (std::is_same_v<RayAt, RayArray>) {
+            (void)n, (void)copy;
+            return ray_at.rays + first;
+        } else {
+            for (std::size_t k = 0; k < n; ++k) copy[k] = ray_at(first + k);
+            return copy;
+        }
+    }
+
     // Rays of a stream are taken this many at a time (their state lives on the stack).
     static constexpr std::size_t stream_chunk = 64;
     static_assert(stream_chunk <= RayLanes<T>::capacity, "a chunk of rays fits one block of lanes");
@@ -812,15 +829,15 @@ private:
     // bounds in the same order and ends with the same hit.
     template <class RayAt>
     void stream_nearest(const RayAt& ray_at, std::size_t count, Hit<T>* hits, const Culled* culled) const {
-        Ray<T> rays[stream_chunk];
+        Ray<T> copy[stream_chunk];
         T t[stream_chunk];
         Hit<T> found[stream_chunk];
         RayLanes<T> lanes;
         for (std::size_t first = 0; first < count; first += stream_chunk) {
             const std::size_t n = std::min(stream_chunk, count - first);
+            const Ray<T>* rays = chunk_of(ray_at, first, n, copy);
             Hit<T>* best = hits + first;
-            for (std::size_t k = 0; k < n; ++k)
-                rays[k] = ray_at(first + k), t[k] = std::numeric_limits<T>::infinity(), best[k] = Hit<T>{};
+            for (std::size_t k = 0; k < n; ++k) t[k] = std::numeric_limits<T>::infinity(), best[k] = Hit<T>{};
             bool lanes_set = false;
             for_each_kind([&](auto kind, const auto& vec) {
                 using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
@@ -877,15 +894,16 @@ private:
     // The stream occluded: a ray already blocked goes on with t_max = 0 (nothing to find).
     template <class RayAt>
     void stream_occluded(const RayAt& ray_at, std::size_t count, const T* t_max, std::uint8_t* blocked) const {
-        Ray<T> rays[stream_chunk];
+        Ray<T> copy[stream_chunk];
         T limit[stream_chunk];
         std::uint8_t hit[stream_chunk];
         RayLanes<T> lanes;
         for (std::size_t first = 0; first < count; first += stream_chunk) {
             bool lanes_set = false;
             const std::size_t n = std::min(stream_chunk, count - first);
+            const Ray<T>* rays = chunk_of(ray_at, first, n, copy);
             std::uint8_t* out = blocked + first;
-            for (std::size_t k = 0; k < n; ++k) rays[k] = ray_at(first + k), limit[k] = t_max[first + k], out[k] = 0;
+            for (std::size_t k = 0; k < n; ++k) limit[k] = t_max[first + k], out[k] = 0;
             const auto through_bvh = [&](const Bvh<T>& bvh, const Ray<T>* r) {
                 for (std::size_t k = 0; k < n; ++k)
                     if (out[k]) limit[k] = T(0);
