@@ -137,7 +137,7 @@ isin::Image render_per_pixel(const S& scene, const isin::Camera<typename S::valu
     return image;
 }
 
-/// Renders `scene` with isin::render (4×4 tiles, stream calls: packets where the scene has Bvhs)
+/// Renders `scene` with isin::render (8×8 blocks of 4×4 tiles, stream calls: packets where the scene has Bvhs)
 /// and with render_per_pixel, interleaved; prints both medians, their ratio, and whether the
 /// pictures are the same bit for bit.
 template <class S>
@@ -203,7 +203,7 @@ int main(int argc, char** argv) {
             run<float>(threads, depth, repeats);
             run<double>(threads, depth, repeats);
         }
-    std::printf("\nthe renderer's 4x4 tiles through the stream calls against each pixel traced alone (the renderer "
+    std::printf("\nthe renderer's 8x8 blocks through the stream calls against each pixel traced alone (the renderer "
                 "before packets), 800x450, median of %d interleaved renders\n%-22s %7s %5s %10s %10s %9s\n",
                 repeats, "scene", "threads", "depth", "tiles ms", "pixels ms", "speed-up");
     const auto knot = knot_scene();

@@ -25,7 +25,8 @@ template <class T>
 isin::Vertex<T> at_barycentrics(const isin::Triangle<T>& t, long double b1, long double b2) {
     const long double b0 = 1.0L - b1 - b2;
     auto c = [&](int a) {
-        return T(b0 * isin::component(t.v0, a) + b1 * isin::component(t.v1, a) + b2 * isin::component(t.v2, a));
+        const auto x = [&](const isin::Vertex<T>& v) { return static_cast<long double>(isin::component(v, a)); };
+        return T(b0 * x(t.v0) + b1 * x(t.v1) + b2 * x(t.v2));
     };
     return {c(0), c(1), c(2)};
 }
@@ -76,7 +77,7 @@ TEST_CASE_TEMPLATE("ray lanes: may_hit keeps every ray Möller–Trumbore hits: 
             // Points on an edge (one barycentric exactly 0), at a vertex, just inside or outside
             // an edge (by a few ulps of the barycentrics), and anywhere.
             long double b1 = unit(rng), b2 = unit(rng) * (1.0L - b1);
-            const long double nudge = T(k % 5 - 2) * std::numeric_limits<T>::epsilon();
+            const long double nudge = (k % 5 - 2) * static_cast<long double>(std::numeric_limits<T>::epsilon());
             switch (k % 6) {
             case 0: b1 = 0.0L + nudge; break;
             case 1: b2 = 0.0L + nudge; break;

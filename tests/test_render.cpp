@@ -517,7 +517,7 @@ bool render_is_trace_per_pixel(const S& scene, const isin::Camera<typename S::va
 }
 } // namespace
 
-TEST_CASE_TEMPLATE("render: tiles of 4×4 pixels through the stream calls give each pixel trace()'s colour", T, float,
+TEST_CASE_TEMPLATE("render: blocks of 8×8 pixels through the stream calls give each pixel trace()'s colour", T, float,
                    double) {
     isin::RenderOptions opt;
     opt.progress = false;

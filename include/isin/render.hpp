@@ -1,7 +1,8 @@
 #pragma once
 /// isin — a Whitted-style renderer (note §3, §7–§11): primary rays per pixel, Phong shading with
 /// shadow rays, recursive reflection and transmission, optional supersampling and backface
-/// culling, multi-threaded over bands of rows traced in 4×4-pixel tiles (packets of rays).
+/// culling, multi-threaded over bands of rows traced in blocks of 8×8 pixels (streams of rays:
+/// packets where the scene has Bvhs, rays × objects in lanes where it is small).
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -252,21 +253,26 @@ Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shadi
 
 // Secondary rays go as streams down to this depth, then one by one (trace()): each level keeps
 // its rays' shading on the stack.
-constexpr int stream_depth = 8;
+constexpr int stream_depth = 4;
+// Rays traced together: the renderer's 8×8 blocks of pixels (four 4×4 tiles, the Bvh's packets),
+// their shadow rays, and their reflected and transmitted rays.
+constexpr int stream_rays = 64;
 
-// Up to 16 rays at `depth` (a 4×4 tile of primary rays at depth 0, which `skip` culls), each
-// pixel's colour into out[] exactly as trace() computes it: the rays through the scene's stream
-// intersect (packets), their shadow rays light by light through the stream occluded when
+// Up to stream_rays rays at `depth` (a block of primary rays at depth 0, which `skip` culls),
+// each one's colour into out[] exactly as trace() computes it: the rays through the scene's
+// stream intersect (packets), the shadow rays of all lights through the stream occluded when
 // nothing in the scene is transparent (then transmittance is 0 or 1), else through the stream
-// transmittance; their reflected and transmitted rays as streams of their own.
+// transmittance, and each point's lights added in the lights' order; the reflected and the
+// transmitted rays as streams of their own.
 template <class T, template <class> class... S>
 void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int depth, bool opaque,
                   const RenderOptions& opt, RenderStats& stats, const typename Scene<T, S...>::Culled* skip,
                   Color<T>* out) {
-    Hit<T> hits[16];
+    constexpr int N = stream_rays;
+    Hit<T> hits[N];
     scene.intersect(rays, std::size_t(n), hits, skip);
-    Shading<T> s[16];
-    int shaded[16], count = 0;
+    Shading<T> s[N];
+    int shaded[N], count = 0;
     for (int k = 0; k < n; ++k) {
         if (!hits[k]) {
             out[k] = scene.background;
@@ -275,32 +281,37 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
         s[k] = begin_shading(scene, rays[k], hits[k]);
         shaded[count++] = k;
     }
-    for (const PointLight<T>& light : scene.lights) {
-        Vertex<T> L[16];
-        Ray<T> shadow[16];
-        int lit[16], m = 0;
-        for (int i = 0; i < count; ++i)
-            if (lit_by(s[shaded[i]], light, L[m], shadow[m])) lit[m++] = shaded[i];
+    // §9: shadow rays of as many lights as fit in one stream, light after light.
+    const std::size_t lights = scene.lights.size();
+    for (std::size_t first = 0; first < lights;) {
+        Vertex<T> L[N];
+        Ray<T> shadow[N];
+        int lit[N], m = 0;
+        std::size_t light_of[N], last = first;
+        for (; last < lights && m + count <= N; ++last)
+            for (int i = 0; i < count; ++i)
+                if (lit_by(s[shaded[i]], scene.lights[last], L[m], shadow[m])) lit[m] = shaded[i], light_of[m++] = last;
+        T visible[N];
         if (!opt.shadows) {
-            for (int i = 0; i < m; ++i) add_light(s[lit[i]], light, L[i], T(1));
-            continue;
-        }
-        stats.shadow += std::uint64_t(m);
-        const T one[16] = {T(1), T(1), T(1), T(1), T(1), T(1), T(1), T(1),
-                           T(1), T(1), T(1), T(1), T(1), T(1), T(1), T(1)};
-        if (opaque) {
-            std::uint8_t blocked[16];
-            scene.occluded(shadow, std::size_t(m), one, blocked);
-            for (int i = 0; i < m; ++i) add_light(s[lit[i]], light, L[i], blocked[i] ? T(0) : T(1));
+            for (int i = 0; i < m; ++i) visible[i] = T(1);
         } else {
-            T visible[16];
-            scene.transmittance(shadow, std::size_t(m), one, visible);
-            for (int i = 0; i < m; ++i) add_light(s[lit[i]], light, L[i], visible[i]);
+            stats.shadow += std::uint64_t(m);
+            T one[N];
+            for (T& t : one) t = T(1);
+            if (opaque) {
+                std::uint8_t blocked[N];
+                scene.occluded(shadow, std::size_t(m), one, blocked);
+                for (int i = 0; i < m; ++i) visible[i] = blocked[i] ? T(0) : T(1);
+            } else {
+                scene.transmittance(shadow, std::size_t(m), one, visible);
+            }
         }
+        for (int i = 0; i < m; ++i) add_light(s[lit[i]], scene.lights[light_of[i]], L[i], visible[i]);
+        first = last;
     }
     // §8: the reflected and the transmitted rays of every point that has them, as two streams.
-    Ray<T> next[2][16];
-    int counts[2] = {0, 0}, slot[2][16];
+    Ray<T> next[2][N];
+    int counts[2] = {0, 0}, slot[2][N];
     for (int i = 0; i < count; ++i) {
         const int k = shaded[i];
         if (!has_secondary(s[k], depth, opt)) {
@@ -313,7 +324,7 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
         if (sec.transmits) slot[1][k] = counts[1], next[1][counts[1]++] = sec.transmitted;
     }
     if (counts[0] + counts[1] == 0) return;
-    Color<T> back[2][16];
+    Color<T> back[2][N];
     for (int j = 0; j < 2; ++j) {
         if (counts[j] == 0) continue;
         if (depth + 1 < stream_depth)
@@ -375,9 +386,9 @@ template <class T, template <class> class... S>
     const auto masks = backface_masks(scene, camera, opt.culling);
     const auto* skip = opt.culling == Culling::none ? nullptr : &masks;
 
-    // Bands of 4 rows, traced in tiles of 4×4 pixels: 16 primary rays at a time, and their shadow
-    // rays, through the scene's stream calls (packets).
-    const int bands = (rows + 3) / 4;
+    // Bands of 8 rows, traced in blocks of 8×8 pixels ordered as four 4×4 tiles (the Bvh's
+    // packets): 64 primary rays at a time, and their shadow rays, through the scene's stream calls.
+    const int bands = (rows + 7) / 8;
     const int threads = std::min(detail::thread_count(opt.threads), bands);
     std::atomic<int> next_band{0}, rows_done{0};
     bool opaque = true; // nothing transparent: a shadow ray's transmittance is 0 or 1
@@ -395,28 +406,30 @@ template <class T, template <class> class... S>
         RenderStats local; // on the worker's own stack: no false sharing while counting
         auto last_report = start;
         for (int band; !error.failed() && (band = next_band.fetch_add(1)) < bands;) {
-            const int row0 = 4 * band, band_rows = std::min(4, rows - row0);
-            for (int x0 = 0; x0 < W; x0 += 4) {
-                const int tile_w = std::min(4, W - x0), n = tile_w * band_rows;
-                Color<T> sum[16];
+            const int row0 = 8 * band, band_rows = std::min(8, rows - row0);
+            for (int x0 = 0; x0 < W; x0 += 8) {
+                int at_x[detail::stream_rays], at_y[detail::stream_rays], n = 0; // the block's pixels, tile by tile
+                for (int ty = 0; ty < band_rows; ty += 4)
+                    for (int tx = x0; tx < std::min(x0 + 8, W); tx += 4)
+                        for (int y = ty; y < std::min(ty + 4, band_rows); ++y)
+                            for (int x = tx; x < std::min(tx + 4, W); ++x) at_x[n] = x, at_y[n++] = row0 + y;
+                Color<T> sum[detail::stream_rays];
                 for (Color<T>& c : sum) c = {T(0), T(0), T(0)};
                 for (int sy = 0; sy < N; ++sy)
                     for (int sx = 0; sx < N; ++sx) {
-                        Ray<T> rays[16];
+                        Ray<T> rays[detail::stream_rays];
                         for (int k = 0; k < n; ++k) {
-                            const int x = x0 + k % tile_w, y = first_row + row0 + k / tile_w;
-                            const T px = T(x) + (T(sx) + T(0.5)) / T(N) - T(0.5);
-                            const T py = T(y) + (T(sy) + T(0.5)) / T(N) - T(0.5);
+                            const T px = T(at_x[k]) + (T(sx) + T(0.5)) / T(N) - T(0.5);
+                            const T py = T(first_row + at_y[k]) + (T(sy) + T(0.5)) / T(N) - T(0.5);
                             rays[k] = camera.primary_ray(px, py); // §3
                         }
                         local.primary += std::uint64_t(n);
-                        Color<T> colour[16];
+                        Color<T> colour[detail::stream_rays];
                         detail::trace_stream(scene, rays, n, 0, opaque, opt, local, skip, colour);
                         for (int k = 0; k < n; ++k) sum[k] += colour[k];
                     }
                 for (int k = 0; k < n; ++k)
-                    image(x0 + k % tile_w, row0 + k / tile_w) =
-                        to_rgb8(N == 1 ? sum[k] : sum[k] / T(N * N), opt.encoding); // x/1 = x
+                    image(at_x[k], at_y[k]) = to_rgb8(N == 1 ? sum[k] : sum[k] / T(N * N), opt.encoding); // x/1 = x
             }
             const int done = rows_done.fetch_add(band_rows) + band_rows;
             if (reporter && show_progress) {
