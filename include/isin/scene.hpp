@@ -852,7 +852,9 @@ private:
                             const int k = detail::lowest_bit(maybe);
                             const Hit<T> h = intersect_primitive(rays[k], vec[i].shape, triangle_method);
                             if (!(h.t < t[k])) continue;
-                            t[k] = h.t, best[k] = h;
+                            // field by field: a whole-struct copy of h read it back from the stack
+                            // wider than it had been stored, a store-forwarding stall per hit
+                            t[k] = h.t, best[k].t = h.t, best[k].u = h.u, best[k].v = h.v;
                             best[k].primitive = static_cast<std::uint32_t>(i);
                             best[k].geometry = static_cast<std::uint32_t>(kind);
                         }
