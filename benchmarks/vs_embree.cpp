@@ -18,7 +18,9 @@
 // program re-executes itself with `--build-only --mesh M --threads N --library L`, which builds
 // isin (BvhOptions::threads = N) or Embree (a device made with "threads=N") once untimed, then
 // --repeats times, and prints the median and the CPU-time/wall-time ratio of the builds (≈ 1.0
-// shows a build really ran on one thread). Each library builds alone in its own process (a
+// shows a build really ran on one thread), and the SAH cost of isin's tree (BvhTree::sah_cost:
+// the nodes, leaves and triangles a ray through the root meets on average; the same on any
+// thread count). Each library builds alone in its own process (a
 // build's memory, freed or kept by the allocator, would change the other's page faults);
 // `--library both` interleaves the two in one process.
 //
@@ -555,6 +557,7 @@ int build_only(const Options& opt) {
     bo.threads = opt.build_threads;
     std::vector<double> isin_ms, embree_ms, isin_cpu, embree_cpu;
     std::size_t check = 0;
+    isin::BvhCost sah;
     const bool isin = opt.build_library != "embree", embree = opt.build_library != "isin";
     for (int rep = -1; rep < opt.repeats; ++rep) { // rep −1: warm-up (Embree's thread pool, page faults)
         double c0 = cpu_seconds();
@@ -563,6 +566,7 @@ int build_only(const Options& opt) {
             const isin::Bvh<float> bvh{tris, bo};
             const double s = since(t0), c = cpu_seconds() - c0;
             check += bvh.node_count();
+            if (rep < 0) sah = bvh.tree().sah_cost(); // the tree's quality, untimed
             if (rep >= 0) isin_ms.push_back(1e3 * s), isin_cpu.push_back(c / s);
         }
         if (!embree) continue;
@@ -575,13 +579,14 @@ int build_only(const Options& opt) {
     }
     rtcReleaseDevice(device);
     const auto or_none = [](const std::vector<double>& v) { return v.empty() ? not_measured : median(v); };
-    std::printf("BUILD %.3f %.3f %.3f %.3f %zu\n", or_none(isin_ms), or_none(isin_cpu), or_none(embree_ms),
-                or_none(embree_cpu), check);
+    std::printf("BUILD %.3f %.3f %.3f %.3f %zu %.6f %.6f %.6f\n", or_none(isin_ms), or_none(isin_cpu),
+                or_none(embree_ms), or_none(embree_cpu), check, sah.node_visits, sah.leaf_visits, sah.primitive_tests);
     return 0;
 }
 
 struct BuildTimes {
     double isin_ms = not_measured, isin_cpu = not_measured, embree_ms = not_measured, embree_cpu = not_measured;
+    isin::BvhCost sah; // isin's tree: expected nodes, leaves and triangles a ray through the root meets
 };
 
 // The build times of `mesh` on `threads` threads: each library in a child process of its own.
@@ -597,13 +602,14 @@ BuildTimes child_build(const Options& opt, const std::string& mesh, int threads)
         BuildTimes child;
         while (std::fgets(line, sizeof line, pipe)) {
             unsigned long long check = 0;
-            if (std::sscanf(line, "BUILD %lf %lf %lf %lf %llu", &child.isin_ms, &child.isin_cpu, &child.embree_ms,
-                            &child.embree_cpu, &check) != 5)
+            if (std::sscanf(line, "BUILD %lf %lf %lf %lf %llu %lf %lf %lf", &child.isin_ms, &child.isin_cpu,
+                            &child.embree_ms, &child.embree_cpu, &check, &child.sah.node_visits, &child.sah.leaf_visits,
+                            &child.sah.primitive_tests) != 8)
                 std::fputs(line, stderr);
         }
         if (pclose(pipe) != 0) std::fprintf(stderr, "build child failed: %s\n", command.c_str());
         if (library == "isin")
-            b.isin_ms = child.isin_ms, b.isin_cpu = child.isin_cpu;
+            b.isin_ms = child.isin_ms, b.isin_cpu = child.isin_cpu, b.sah = child.sah;
         else
             b.embree_ms = child.embree_ms, b.embree_cpu = child.embree_cpu;
     }
@@ -745,8 +751,15 @@ int run(const Options& opt) {
             static_cast<unsigned long long>(shadow_ref[1].hits), static_cast<unsigned long long>(robust_shadow.hits));
         std::printf("  builds (child process each):");
         for (std::size_t ti = 0; ti < opt.threads.size(); ++ti)
-            std::printf(" %d thr: isin %.1f ms (cpu/wall %.2f), Embree %.1f ms (cpu/wall %.2f);", opt.threads[ti],
-                        builds[ti].isin_ms, builds[ti].isin_cpu, builds[ti].embree_ms, builds[ti].embree_cpu);
+            std::printf(" %d thr: isin %.1f ms (cpu/wall %.2f; SAH: %.3f nodes, %.3f leaves, %.3f triangles a ray), "
+                        "Embree %.1f ms (cpu/wall %.2f);",
+                        opt.threads[ti], builds[ti].isin_ms, builds[ti].isin_cpu, builds[ti].sah.node_visits,
+                        builds[ti].sah.leaf_visits, builds[ti].sah.primitive_tests, builds[ti].embree_ms,
+                        builds[ti].embree_cpu);
+        const isin::BvhCost embree_sah = embree_scene::builder_sah(device, tris);
+        std::printf(" Embree's builder (rtcBuildBVH, 8 wide, leaves of 1-8, blocks of 8) SAH: %.3f nodes, %.3f leaves, "
+                    "%.3f triangles a ray;",
+                    embree_sah.node_visits, embree_sah.leaf_visits, embree_sah.primitive_tests);
         std::printf(" mesh %.2f s, setup %.2f s\n", gen_s, setup_s);
         std::fflush(stdout);
         all_ok = PacketBench(opt, bvh, scene, tris).run(name, opt, packet_table) && all_ok;

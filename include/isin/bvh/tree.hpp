@@ -25,6 +25,19 @@ struct BvhOptions {
     int leaf_size = 8; ///< SAH leaves hold at most this many primitives (1…8)
 };
 
+/// What a tree costs a ray by the surface area heuristic (Goldsmith & Salmon 1987; MacDonald &
+/// Booth 1990): for a ray that enters the root's box, from directions spread uniformly, the
+/// expected number of 8-wide nodes it visits, of leaves it tests and of primitives in them. A box
+/// inside the root's is entered with probability (its surface area) / (the root's). Lower is
+/// better for the same primitives; `cost` weighs them (the build's plan weighs a node and a leaf
+/// alike: cost(1, 1, 0)).
+struct BvhCost {
+    double node_visits = 0, leaf_visits = 0, primitive_tests = 0;
+    [[nodiscard]] double cost(double per_node, double per_leaf, double per_primitive) const noexcept {
+        return per_node * node_visits + per_leaf * leaf_visits + per_primitive * primitive_tests;
+    }
+};
+
 /// A bounding volume hierarchy over primitives known only by their boxes; see the top of this
 /// header.
 template <class T>
@@ -72,6 +85,44 @@ public:
         if (nodes_.empty()) return b;
         for (int k = 0; k < 8; ++k) b.grow(child_box(nodes_[0], k));
         return b;
+    }
+
+    /// The tree's SAH cost (BvhCost; all 0 for an empty tree). The root node counts 1; a root box
+    /// without area (all boxes one point, or on one line) counts every node and leaf as visited.
+    /// Areas are taken in double from half extents scaled by the root's, so no finite box
+    /// overflows. O(nodes), no allocation.
+    [[nodiscard]] BvhCost sah_cost() const noexcept {
+        BvhCost c;
+        if (nodes_.empty()) return c;
+        const Box<T> root = bounds();
+        const double half[3] = {double(root.hi.x) * 0.5 - double(root.lo.x) * 0.5,
+                                double(root.hi.y) * 0.5 - double(root.lo.y) * 0.5,
+                                double(root.hi.z) * 0.5 - double(root.lo.z) * 0.5};
+        const double scale = std::max({half[0], half[1], half[2]});
+        const auto area = [scale](const Node& n, int k) { // of child k's box, the root's half extents scaled to ≤ 1
+            double e[3];
+            for (int a = 0; a < 3; ++a) e[a] = (double(n.hi[a][k]) * 0.5 - double(n.lo[a][k]) * 0.5) / scale;
+            return e[0] * e[1] + e[1] * e[2] + e[2] * e[0];
+        };
+        double root_area = 0.0;
+        if (scale > 0.0) {
+            const double e0 = half[0] / scale, e1 = half[1] / scale, e2 = half[2] / scale;
+            root_area = e0 * e1 + e1 * e2 + e2 * e0;
+        }
+        c.node_visits = 1.0;
+        for (const Node& n : nodes_)
+            for (int k = 0; k < 8; ++k) {
+                const std::uint32_t ref = n.child[k];
+                if (ref == empty_child) continue;
+                const double p = root_area > 0.0 ? std::min(1.0, area(n, k) / root_area) : 1.0;
+                if (ref & leaf_bit) {
+                    c.leaf_visits += p;
+                    c.primitive_tests += p * double(leaves_[ref & ~leaf_bit].count);
+                } else {
+                    c.node_visits += p;
+                }
+            }
+        return c;
     }
 
     /// Refit: recomputes every box from `box_of(primitive)` (a Box<T>), keeping the topology —
