@@ -391,15 +391,10 @@ private:
     }
 
     // The children `plan` chose for subtree `n` given `slots` places.
-    // At most `slots` of them: a node's 8 fit in a fixed array (no allocation per node).
-    struct Kids {
-        const BinaryNode<T>* at[8];
-        int size = 0;
-    };
-    static void gather(const BinaryNode<T>& n, int slots, Kids& kids) noexcept {
+    static void gather(const BinaryNode<T>& n, int slots, std::vector<const BinaryNode<T>*>& kids) {
         const int how = n.how[slots - 1];
         if (how == 0 || how == n.merged) {
-            kids.at[kids.size++] = &n;
+            kids.push_back(&n);
         } else {
             gather(*n.left, how, kids);
             gather(*n.right, slots - how, kids);
@@ -411,12 +406,12 @@ private:
         const std::size_t index = tree_.nodes_.size();
         tree_.nodes_.emplace_back();
         clear(tree_.nodes_[index]);
-        Kids kids;
+        std::vector<const BinaryNode<T>*> kids;
         gather(*bin.left, bin.wide_split, kids);
         gather(*bin.right, 8 - bin.wide_split, kids);
-        for (int k = 0; k < kids.size; ++k) {
-            const std::uint32_t ref = kids.at[k]->becomes_leaf() ? add_leaf(*kids.at[k]) : collapse(*kids.at[k]);
-            set_child(index, k, *kids.at[k], ref);
+        for (std::size_t k = 0; k < kids.size(); ++k) {
+            const std::uint32_t ref = kids[k]->becomes_leaf() ? add_leaf(*kids[k]) : collapse(*kids[k]);
+            set_child(index, int(k), *kids[k], ref);
         }
         return static_cast<std::uint32_t>(index);
     }
