@@ -100,7 +100,6 @@ inline void add(const Node& n, double root_area, double scale, isin::BvhCost& c)
 inline isin::BvhCost builder_sah(RTCDevice device, const std::vector<isin::Triangle<float>>& tris) {
     std::vector<RTCBuildPrimitive> prims;
     prims.reserve(tris.size());
-    RTCBounds all{1e30f, 1e30f, 1e30f, 0, -1e30f, -1e30f, -1e30f, 0};
     for (std::size_t k = 0; k < tris.size(); ++k) {
         const isin::Triangle<float>& t = tris[k];
         RTCBuildPrimitive p;
@@ -109,9 +108,6 @@ inline isin::BvhCost builder_sah(RTCDevice device, const std::vector<isin::Trian
         p.lower_z = std::min({t.v0.z, t.v1.z, t.v2.z}), p.upper_z = std::max({t.v0.z, t.v1.z, t.v2.z});
         p.geomID = 0, p.primID = unsigned(k);
         prims.push_back(p);
-        all.lower_x = std::min(all.lower_x, p.lower_x), all.upper_x = std::max(all.upper_x, p.upper_x);
-        all.lower_y = std::min(all.lower_y, p.lower_y), all.upper_y = std::max(all.upper_y, p.upper_y);
-        all.lower_z = std::min(all.lower_z, p.lower_z), all.upper_z = std::max(all.upper_z, p.upper_z);
     }
     RTCBVH bvh = rtcNewBVH(device);
     RTCBuildArguments args = rtcDefaultBuildArguments();
@@ -134,6 +130,13 @@ inline isin::BvhCost builder_sah(RTCDevice device, const std::vector<isin::Trian
     isin::BvhCost c;
     const auto* root = static_cast<const sah_detail::Node*>(rtcBuildBVH(&args));
     if (root && !root->leaf) {
+        RTCBounds all = root->bounds[0]; // the root's box: its children's together
+        for (unsigned k = 1; k < root->count; ++k) {
+            const RTCBounds& b = root->bounds[k];
+            all.lower_x = std::min(all.lower_x, b.lower_x), all.upper_x = std::max(all.upper_x, b.upper_x);
+            all.lower_y = std::min(all.lower_y, b.lower_y), all.upper_y = std::max(all.upper_y, b.upper_y);
+            all.lower_z = std::min(all.lower_z, b.lower_z), all.upper_z = std::max(all.upper_z, b.upper_z);
+        }
         const double scale =
             std::max({double(all.upper_x) - double(all.lower_x), double(all.upper_y) - double(all.lower_y),
                       double(all.upper_z) - double(all.lower_z)});

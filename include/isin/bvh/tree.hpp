@@ -95,26 +95,14 @@ public:
         BvhCost c;
         if (nodes_.empty()) return c;
         const Box<T> root = bounds();
-        const double half[3] = {double(root.hi.x) * 0.5 - double(root.lo.x) * 0.5,
-                                double(root.hi.y) * 0.5 - double(root.lo.y) * 0.5,
-                                double(root.hi.z) * 0.5 - double(root.lo.z) * 0.5};
-        const double scale = std::max({half[0], half[1], half[2]});
-        const auto area = [scale](const Node& n, int k) { // of child k's box, the root's half extents scaled to ≤ 1
-            double e[3];
-            for (int a = 0; a < 3; ++a) e[a] = (double(n.hi[a][k]) * 0.5 - double(n.lo[a][k]) * 0.5) / scale;
-            return e[0] * e[1] + e[1] * e[2] + e[2] * e[0];
-        };
-        double root_area = 0.0;
-        if (scale > 0.0) {
-            const double e0 = half[0] / scale, e1 = half[1] / scale, e2 = half[2] / scale;
-            root_area = e0 * e1 + e1 * e2 + e2 * e0;
-        }
+        const double scale = std::max({half_extent(root, 0), half_extent(root, 1), half_extent(root, 2)});
+        const double root_area = scale > 0.0 ? scaled_area(root, scale) : 0.0;
         c.node_visits = 1.0;
         for (const Node& n : nodes_)
             for (int k = 0; k < 8; ++k) {
                 const std::uint32_t ref = n.child[k];
                 if (ref == empty_child) continue;
-                const double p = root_area > 0.0 ? std::min(1.0, area(n, k) / root_area) : 1.0;
+                const double p = root_area > 0.0 ? std::min(1.0, scaled_area(child_box(n, k), scale) / root_area) : 1.0;
                 if (ref & leaf_bit) {
                     c.leaf_visits += p;
                     c.primitive_tests += p * double(leaves_[ref & ~leaf_bit].count);
@@ -160,6 +148,15 @@ private:
         Box<T> b;
         b.lo = {n.lo[0][k], n.lo[1][k], n.lo[2][k]}, b.hi = {n.hi[0][k], n.hi[1][k], n.hi[2][k]};
         return b;
+    }
+    // sah_cost's measure: Box::area's, in double, from half extents divided by `scale` (the
+    // root's largest half extent, so every box of the tree measures at most 3 and none overflows).
+    [[nodiscard]] static double half_extent(const Box<T>& b, int a) noexcept {
+        return double(component(b.hi, a)) * 0.5 - double(component(b.lo, a)) * 0.5;
+    }
+    [[nodiscard]] static double scaled_area(const Box<T>& b, double scale) noexcept {
+        const double x = half_extent(b, 0) / scale, y = half_extent(b, 1) / scale, z = half_extent(b, 2) / scale;
+        return x * y + y * z + z * x;
     }
     static void set_box(Node& n, int k, const Box<T>& b) noexcept {
         for (int a = 0; a < 3; ++a) n.lo[a][k] = component(b.lo, a), n.hi[a][k] = component(b.hi, a);
