@@ -159,7 +159,7 @@ private:
     };
 
     struct Bin {
-        Box4<T> box, centroids;
+        Box4<T> box;
         std::uint32_t n = 0;
     };
     struct Bins {
@@ -170,7 +170,7 @@ private:
                     Bin& x = at[a][b];
                     const Bin& y = o.at[a][b];
                     if (!y.n) continue;
-                    x.box.grow(y.box.lo, y.box.hi), x.centroids.grow(y.centroids.lo, y.centroids.hi), x.n += y.n;
+                    x.box.grow(y.box.lo, y.box.hi), x.n += y.n;
                 }
         }
     };
@@ -205,7 +205,7 @@ private:
                 const Prim& p = prims[i];
                 for (int a = 0; a < 3; ++a) {
                     Bin& b = into.at[a][binning.bin(p, a)];
-                    b.box.grow(p.lo, p.hi), b.centroids.grow(p.centroid, p.centroid), ++b.n;
+                    b.box.grow(p.lo, p.hi), ++b.n;
                 }
             }
         };
@@ -254,16 +254,23 @@ private:
         Box<T> left_box, right_box, left_centroids, right_centroids;
         if (best_axis >= 0) {
             const int a = best_axis;
-            for (int b = 0; b < bins; ++b) {
-                Box<T>& side = b <= best_split ? left_box : right_box;
-                Box<T>& side_c = b <= best_split ? left_centroids : right_centroids;
-                if (bin.at[a][b].n) side.grow(bin.at[a][b].box.box()), side_c.grow(bin.at[a][b].centroids.box());
+            for (int b = 0; b < bins; ++b)
+                if (bin.at[a][b].n) (b <= best_split ? left_box : right_box).grow(bin.at[a][b].box.box());
+            // The partition, by the binning's own rule (so the sweep's counts), finds the
+            // children's centroid bounds on the way: each primitive is tested once.
+            const auto goes_left = [&](const Prim& p) { return binning.bin(p, a) <= best_split; };
+            Box4<T> lc, rc;
+            std::uint32_t i = first, j = first + count;
+            for (;;) {
+                while (i < j && goes_left(prims[i])) lc.grow(prims[i].centroid, prims[i].centroid), ++i;
+                while (i < j && !goes_left(prims[j - 1])) --j, rc.grow(prims[j].centroid, prims[j].centroid);
+                if (i == j) break;
+                std::swap(prims[i], prims[j - 1]);
+                lc.grow(prims[i].centroid, prims[i].centroid), ++i;
+                --j, rc.grow(prims[j].centroid, prims[j].centroid);
             }
-            const auto middle =
-                std::partition(prims.begin() + first, prims.begin() + first + count, [&](const Prim& p) {
-                    return binning.bin(p, a) <= best_split; // the binning's own rule: the sweep's counts
-                });
-            mid = static_cast<std::uint32_t>(middle - prims.begin());
+            mid = i;
+            left_centroids = lc.box(), right_centroids = rc.box();
         }
         if (mid == first || mid == first + count) { // deep, or no axis binned: the median of the widest axis
             const Vertex<T> extent = centroids.hi * T(0.5) - centroids.lo * T(0.5);
