@@ -227,20 +227,21 @@ private:
         int best_axis = -1, best_split = 0;
         for (int a = 0; a < 3 && binned; ++a) {
             if (!(binning.scale[a] > T(0))) continue;
+            const Bin* const axis = bin.at[a];
             T right_area[bins];
             std::uint32_t right_n[bins];
-            Box<T> acc;
+            Box4<T> acc; // grown bin by bin as two vector min/max
             std::uint32_t acc_n = 0;
             for (int b = bins - 1; b > 0; --b)
-                acc.grow(bin.at[a][b].box.box()), acc_n += bin.at[a][b].n, right_area[b] = acc.area(),
-                                                                           right_n[b] = acc_n;
+                acc.grow(axis[b].box), acc_n += axis[b].n, right_area[b] = acc.box().area(), right_n[b] = acc_n;
             acc = {}, acc_n = 0;
             for (int b = 0; b < bins - 1; ++b) {
-                acc.grow(bin.at[a][b].box.box()), acc_n += bin.at[a][b].n;
+                acc.grow(axis[b].box), acc_n += axis[b].n;
                 if (acc_n == 0 || right_n[b + 1] == 0) continue;
-                const T cost = acc.area() * T(acc_n) + right_area[b + 1] * T(right_n[b + 1]);
+                const T left_area = acc.box().area();
+                const T cost = left_area * T(acc_n) + right_area[b + 1] * T(right_n[b + 1]);
                 if (cost < best_cost)
-                    best_cost = cost, best_axis = a, best_split = b, best_areas = acc.area() + right_area[b + 1];
+                    best_cost = cost, best_axis = a, best_split = b, best_areas = left_area + right_area[b + 1];
             }
         }
         // Up to leaf_size triangles cost one 8-lane test as a leaf, as each child would: split
