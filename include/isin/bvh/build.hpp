@@ -121,7 +121,10 @@ public:
         } else {
             std::vector<Subtree> subtrees;
             collapse(tree, *root, &subtrees);
-            collapse_subtrees(subtrees);
+            reserve_huge_pages(tree_.primitives_, prims.size());
+            tree_.primitives_.resize(prims.size());
+            collapse_subtrees(prims, subtrees); // fills the primitive order too
+            return std::move(tree_);
         }
         reserve_huge_pages(tree_.primitives_, prims.size());
         tree_.primitives_.resize(prims.size());
@@ -463,8 +466,14 @@ private:
     // their nodes are in its core's cache and its own heap, then any left over. Each subtree
     // gets nodes and leaves of its own, appended in the list's order with their references moved
     // by the nodes and leaves before it.
-    void collapse_subtrees(std::vector<Subtree>& subtrees) {
+    // The same threads fill the primitive order of each subtree's range; the leaves above the
+    // subtrees (made before them) have theirs filled here.
+    void collapse_subtrees(const Prims& prims, std::vector<Subtree>& subtrees) {
         Wide tree{tree_.nodes_, tree_.leaves_};
+        const auto order = [&](std::uint32_t first, std::uint32_t count) {
+            for (std::uint32_t i = first; i < first + count; ++i) tree_.primitives_[i] = prims[i].index;
+        };
+        for (const auto& leaf : tree.leaves) order(leaf.first, leaf.count);
         using Leaf = typename BvhTree<T>::Leaf;
         struct Part {
             std::vector<Node> nodes;
@@ -486,6 +495,7 @@ private:
                     part.leaves.reserve(subtrees[i].bin->count / 4 + 1);
                     Wide out{part.nodes, part.leaves};
                     collapse(out, *subtrees[i].bin);
+                    order(subtrees[i].bin->first, subtrees[i].bin->count);
                     subtrees[i].bin->left.reset(), subtrees[i].bin->right.reset();
                 }
             }
