@@ -121,14 +121,12 @@ public:
         } else {
             std::vector<Subtree> subtrees;
             collapse(tree, *root, &subtrees);
-            reserve_huge_pages(tree_.primitives_, prims.size());
-            tree_.primitives_.resize(prims.size());
+            size_order(prims.size());
             collapse_subtrees(prims, subtrees); // fills the primitive order too
             return std::move(tree_);
         }
-        reserve_huge_pages(tree_.primitives_, prims.size());
-        tree_.primitives_.resize(prims.size());
-        for (std::size_t i = 0; i < prims.size(); ++i) tree_.primitives_[i] = prims[i].index;
+        size_order(prims.size()); // after the collapse: see collapse_subtrees
+        fill_order(prims, 0, static_cast<std::uint32_t>(prims.size()));
         return std::move(tree_);
     }
 
@@ -460,20 +458,27 @@ private:
         return static_cast<std::uint32_t>(index);
     }
 
+    // The tree's primitive order: sized (zeroed) once, then filled range by range.
+    void size_order(std::size_t n) {
+        reserve_huge_pages(tree_.primitives_, n);
+        tree_.primitives_.resize(n);
+    }
+    void fill_order(const Prims& prims, std::uint32_t first, std::uint32_t count) {
+        for (std::uint32_t i = first; i < first + count; ++i) tree_.primitives_[i] = prims[i].index;
+    }
+
     // Collapses the subtrees that collapse(…, later) left, on threads_ threads, and frees each
     // binary subtree once it is collapsed (a serial walk over scattered nodes otherwise: 4 ms of
     // a 2-thread build of 300k triangles). Each thread takes the subtrees it built first, while
     // their nodes are in its core's cache and its own heap, then any left over. Each subtree
     // gets nodes and leaves of its own, appended in the list's order with their references moved
-    // by the nodes and leaves before it.
-    // The same threads fill the primitive order of each subtree's range; the leaves above the
-    // subtrees (made before them) have theirs filled here.
+    // by the nodes and leaves before it, and the same thread fills the subtree's range of the
+    // primitive order. (One thread collapses depth first instead, and sizes the order after
+    // the collapse: done this way, its next builds' arrays came back fresh from the kernel.)
     void collapse_subtrees(const Prims& prims, std::vector<Subtree>& subtrees) {
         Wide tree{tree_.nodes_, tree_.leaves_};
-        const auto order = [&](std::uint32_t first, std::uint32_t count) {
-            for (std::uint32_t i = first; i < first + count; ++i) tree_.primitives_[i] = prims[i].index;
-        };
-        for (const auto& leaf : tree.leaves) order(leaf.first, leaf.count);
+        for (const auto& leaf : tree.leaves)
+            fill_order(prims, leaf.first, leaf.count); // the leaves made so far: above the subtrees
         using Leaf = typename BvhTree<T>::Leaf;
         struct Part {
             std::vector<Node> nodes;
@@ -495,7 +500,7 @@ private:
                     part.leaves.reserve(subtrees[i].bin->count / 4 + 1);
                     Wide out{part.nodes, part.leaves};
                     collapse(out, *subtrees[i].bin);
-                    order(subtrees[i].bin->first, subtrees[i].bin->count);
+                    fill_order(prims, subtrees[i].bin->first, subtrees[i].bin->count);
                     subtrees[i].bin->left.reset(), subtrees[i].bin->right.reset();
                 }
             }
