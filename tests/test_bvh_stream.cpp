@@ -252,3 +252,65 @@ TEST_CASE("Bvh stream: camera tiles form full packets where packets are compiled
     CHECK(path == "single rays");
 #endif
 }
+
+TEST_CASE("Bvh packets: two rays' block test in one register gives each ray's own test bit for bit") {
+#if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
+    using Block = isin::detail::TriangleBlock<float>;
+    using Ray = isin::detail::TriangleRay<float>;
+    using Hits = isin::detail::LaneHits<float>;
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<float> uni(-1, 1);
+    // Scales: ordinary, and products below 2^-126 or beyond 2^126 (blocks test_block_avx2 does
+    // not trust, tested one by one).
+    const float scales[] = {1.0f, 1.0f, 1.0f, 1e-22f, 1e21f};
+    int compared = 0, hit_lanes = 0, differing_axes = 0;
+    for (int i = 0; i < 4000; ++i) {
+        const float s = scales[i % 5];
+        Block b;
+        for (int k = 0; k < 8; ++k) {
+            for (int v = 0; v < 3; ++v)
+                for (int a = 0; a < 3; ++a) b.v[v][a][k] = s * (uni(rng) + (a == 2 ? 3.0f : 0.0f));
+            b.primitive[k] = std::uint32_t(k);
+        }
+        // Ray a towards a lane's centroid; ray b near it (a packet's neighbour) or anywhere.
+        const int aim = int(rng() % 8);
+        const isin::Vertex<float> c{(b.v[0][0][aim] + b.v[1][0][aim] + b.v[2][0][aim]) / 3,
+                                    (b.v[0][1][aim] + b.v[1][1][aim] + b.v[2][1][aim]) / 3,
+                                    (b.v[0][2][aim] + b.v[1][2][aim] + b.v[2][2][aim]) / 3};
+        const isin::Vertex<float> o{s * 0.1f * uni(rng), s * 0.1f * uni(rng), s * 0.1f * uni(rng)};
+        const isin::Vertex<float> jitter{0.02f * uni(rng), 0.02f * uni(rng), 0.02f * uni(rng)};
+        const isin::Vertex<float> d = c - o, d2 = i % 7 == 0 ? isin::Vertex<float>{uni(rng), uni(rng), uni(rng)}
+                                                             : d + jitter * (s * 3.0f);
+        Ray ra({o, d}), rb({o + jitter * s, d2});
+        if (!ra.ready() || !rb.ready()) continue;
+        differing_axes += ra.shear.kz != rb.shear.kz || ra.shear.kx != rb.shear.kx;
+        const float inf = std::numeric_limits<float>::infinity();
+        const float t_a = i % 3 ? inf : 0.9f, t_b = i % 4 ? inf : 0.95f;
+        const auto check = [&](auto cull) {
+            constexpr bool culls = decltype(cull)::value;
+            Hits pa, pb, sa, sb;
+            const unsigned pair = isin::detail::test_block_pair<culls, true>(b, ra, rb, t_a, t_b, pa, pb);
+            const unsigned one =
+                isin::detail::test_block<culls>(b, ra, t_a, sa) | isin::detail::test_block<culls>(b, rb, t_b, sb) << 8;
+            Hits unused_a, unused_b;
+            CHECK(isin::detail::test_block_pair<culls, false>(b, ra, rb, t_a, t_b, unused_a, unused_b) == one);
+            CHECK(pair == one);
+            for (int k = 0; k < 16; ++k) {
+                if (!((one >> k) & 1u)) continue;
+                const Hits &p = k < 8 ? pa : pb, &q = k < 8 ? sa : sb;
+                const int l = k % 8;
+                CHECK((same_bits(p.t[l], q.t[l]) && same_bits(p.u[l], q.u[l]) && same_bits(p.v[l], q.v[l])));
+                ++hit_lanes;
+            }
+            ++compared;
+        };
+        check(std::false_type{});
+        check(std::true_type{});
+    }
+    MESSAGE(compared, " pairs compared, ", hit_lanes, " lanes hit, ", differing_axes, " pairs with different shears");
+    CHECK(hit_lanes > 1000); // the comparison is not vacuous: many lanes hit
+    CHECK(differing_axes > 50);
+#else
+    MESSAGE("two rays in one register need AVX-512 F+DQ: not compiled here");
+#endif
+}

@@ -236,8 +236,11 @@ private:
                       const std::uint8_t* skip) const noexcept {
         detail::LaneHits<T> hits;
         const unsigned lanes = lanes_hit<cull>(leaf, r, t_far, hits, skip);
-        if (!lanes) return;
-        const auto& block = blocks_[leaf];
+        if (lanes) keep_nearest(blocks_[leaf], lanes, hits, t_far, best);
+    }
+    // take_nearest once the lanes hit (≠ 0) and their hits are known.
+    static void keep_nearest(const typename TriangleBlocks<T>::Block& block, unsigned lanes,
+                             const detail::LaneHits<T>& hits, T& t_far, Hit<T>& best) noexcept {
         const int k = detail::nearest_lane(lanes, hits, block);
         if (hits.t[k] > best.t || (hits.t[k] == best.t && block.primitive[k] > best.primitive)) return;
         best = {hits.t[k], hits.u[k], hits.v[k], block.primitive[k]};
@@ -311,6 +314,29 @@ private:
             constexpr bool culls = decltype(cull)::value;
             detail::walk_packet<visit>(tree_, p, [&](std::uint32_t leaf, unsigned active, float(&t_far)[16]) {
                 unsigned done = 0;
+#if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
+                // Two rays at a time in one register while two are left (test_block_pair).
+                for (unsigned rest = active; rest & (rest - 1);) {
+                    const int k = detail::lowest_bit(rest);
+                    rest &= rest - 1;
+                    const int j = detail::lowest_bit(rest);
+                    rest &= rest - 1;
+                    if (!tri[k].ready() || !tri[j].ready()) continue; // no hit for either (single: the same)
+                    active &= ~(1u << k | 1u << j);
+                    const auto& block = blocks_[leaf];
+                    detail::LaneHits<float> hk, hj;
+                    const unsigned both = detail::test_block_pair<culls, visit == Visit::nearest>(
+                        block, tri[k], tri[j], t_far[k], t_far[j], hk, hj);
+                    const unsigned lk = skip_lanes(block, both & 0xffu, filter.skip),
+                                   lj = skip_lanes(block, both >> 8, filter.skip);
+                    if constexpr (visit == Visit::nearest) {
+                        if (lk) keep_nearest(block, lk, hk, t_far[k], best[k]);
+                        if (lj) keep_nearest(block, lj, hj, t_far[j], best[j]);
+                    } else {
+                        done |= (lk ? 1u << k : 0u) | (lj ? 1u << j : 0u);
+                    }
+                }
+#endif
                 for (; active; active &= active - 1) {
                     const int k = detail::lowest_bit(active);
                     if constexpr (visit == Visit::nearest) {
@@ -347,7 +373,11 @@ private:
                        const std::uint8_t* skip) const noexcept {
         if (!r.ready()) return 0;
         const auto& block = blocks_[leaf];
-        unsigned lanes = detail::test_block<cull>(block, r, t_max, hits);
+        return skip_lanes(block, detail::test_block<cull>(block, r, t_max, hits), skip);
+    }
+    // `lanes` of `block` without the triangles the skip mask names.
+    static unsigned skip_lanes(const typename TriangleBlocks<T>::Block& block, unsigned lanes,
+                               const std::uint8_t* skip) noexcept {
         if (skip)
             for (unsigned rest = lanes; rest; rest &= rest - 1) {
                 const int k = detail::lowest_bit(rest);

@@ -123,6 +123,86 @@ inline unsigned test_block_avx2(const TriangleBlock<float>& b, const TriangleRay
     return finish8<cull, store>(U, V, W, p.z, r.shear.Sz, t_max, out);
 }
 
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+#define ISIN_DETAIL_TRIANGLE_PAIRS 1
+
+// a·b − c·d on 16 float lanes: kahan_difference_of_products8's operations.
+inline __m512 kahan_difference_of_products16(__m512 a, __m512 b, __m512 c, __m512 d) noexcept {
+    const __m512 cd = _mm512_mul_ps(c, d);
+    const __m512 error = _mm512_fmsub_ps(c, d, cd); // c·d − cd, exact
+    return _mm512_sub_ps(_mm512_fmsub_ps(a, b, cd), error);
+}
+
+// Two rays' tests of one block at once, ray a in lanes 0-7 and ray b in lanes 8-15 of one
+// AVX-512 register (a packet's rays that enter a leaf together): lane by lane the operations of
+// test_block_avx2, so the same lanes hit with the same t, u, v, in half the instructions and
+// branches. Rays whose shears permute the axes differently, and blocks test_block_avx2 would
+// not trust for either ray, are tested one by one. Both rays must be ready(). Returns ray a's
+// lanes in bits 0-7 and ray b's in bits 8-15.
+template <bool cull, bool store>
+inline unsigned test_block_pair(const TriangleBlock<float>& b, const TriangleRay<float>& ra,
+                                const TriangleRay<float>& rb, float t_max_a, float t_max_b, LaneHits<float>& out_a,
+                                LaneHits<float>& out_b) noexcept {
+    const WatertightShear<float>&sa = ra.shear, &sb = rb.shear;
+    const auto one_by_one = [&] {
+        return test_block_avx2<cull, store>(b, ra, t_max_a, out_a) | test_block_avx2<cull, store>(b, rb, t_max_b, out_b)
+                                                                         << 8;
+    };
+    if (sa.kx != sb.kx || sa.ky != sb.ky || sa.kz != sb.kz) return one_by_one();
+    const auto both = [](float a, float c) {
+        return _mm512_mask_blend_ps(0xff00, _mm512_set1_ps(a), _mm512_set1_ps(c));
+    };
+    // maskz forms with full masks here and below: GCC 12's plain ones warn of an uninitialised
+    // operand of their own (-Wmaybe-uninitialized); same instructions.
+    const auto vertex = [&](int v, int axis) {
+        return _mm512_maskz_broadcast_f32x8(0xffff, _mm256_load_ps(b.v[v][axis]));
+    };
+    const __m512 ox = both(ra.org[sa.kx], rb.org[sa.kx]), oy = both(ra.org[sa.ky], rb.org[sa.ky]);
+    const __m512 oz = both(ra.org[sa.kz], rb.org[sa.kz]);
+    const __m512 Sx = both(sa.Sx, sb.Sx), Sy = both(sa.Sy, sb.Sy);
+    __m512 x[3], y[3], z[3]; // as Sheared8
+    for (int v = 0; v < 3; ++v) {
+        z[v] = _mm512_sub_ps(vertex(v, sa.kz), oz);
+        x[v] = _mm512_fnmadd_ps(Sx, z[v], _mm512_sub_ps(vertex(v, sa.kx), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+        y[v] = _mm512_fnmadd_ps(Sy, z[v], _mm512_sub_ps(vertex(v, sa.ky), oy));
+    }
+    const __m512 U = kahan_difference_of_products16(x[2], y[1], y[2], x[1]); // WBW: U = Cx·By − Cy·Bx
+    const __m512 V = kahan_difference_of_products16(x[0], y[2], y[0], x[2]); // WBW: V = Ax·Cy − Ay·Cx
+    const __m512 W = kahan_difference_of_products16(x[1], y[0], y[1], x[0]); // WBW: W = Bx·Ay − By·Ax
+    const auto max = [](__m512 p, __m512 q) { return _mm512_maskz_max_ps(0xffff, p, q); };
+    const auto min = [](__m512 p, __m512 q) { return _mm512_maskz_min_ps(0xffff, p, q); };
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512 det = _mm512_add_ps(_mm512_add_ps(U, V), W);
+    // test_block_avx2's trust: every edge function at least 2^-126 in magnitude, |det| < 2^126.
+    const __m512 smallest = min(min(_mm512_abs_ps(U), _mm512_abs_ps(V)), _mm512_abs_ps(W));
+    const unsigned trusted = unsigned(_mm512_cmp_ps_mask(smallest, _mm512_set1_ps(0x1p-126f), _CMP_GE_OQ)) &
+                             unsigned(_mm512_cmp_ps_mask(_mm512_abs_ps(det), _mm512_set1_ps(0x1p126f), _CMP_LT_OQ));
+    if (trusted != 0xffff) return one_by_one();
+    // finish8, on 16 lanes
+    unsigned ok = _mm512_cmp_ps_mask(min(min(U, V), W), zero, _CMP_GE_OQ); // clockwise (§2)
+    if constexpr (!cull) ok |= _mm512_cmp_ps_mask(max(max(U, V), W), zero, _CMP_LE_OQ);
+    ok &= _mm512_cmp_ps_mask(det, zero, _CMP_NEQ_OQ);
+    if (!ok) return 0;
+    const __m512 S = both(sa.Sz, sb.Sz);
+    const __m512 t_scaled = _mm512_fmadd_ps(
+        W, _mm512_mul_ps(S, z[2]),
+        _mm512_fmadd_ps(V, _mm512_mul_ps(S, z[1]), _mm512_mul_ps(U, _mm512_mul_ps(S, z[0])))); // WBW: t·det
+    const __m512 inv_det = _mm512_div_ps(_mm512_set1_ps(1.0f), det);
+    const __m512 t = _mm512_mul_ps(t_scaled, inv_det);
+    ok &= unsigned(_mm512_cmp_ps_mask(t, zero, _CMP_GT_OQ)) &
+          unsigned(_mm512_cmp_ps_mask(t, both(t_max_a, t_max_b), _CMP_LT_OQ));
+    if (store && ok) {
+        const auto put = [](__m512 q, float* lo, float* hi) {
+            _mm256_storeu_ps(lo, _mm512_maskz_extractf32x8_ps(0xff, q, 0)),
+                _mm256_storeu_ps(hi, _mm512_maskz_extractf32x8_ps(0xff, q, 1));
+        };
+        put(t, out_a.t, out_b.t), put(_mm512_mul_ps(V, inv_det), out_a.u, out_b.u);
+        put(_mm512_mul_ps(W, inv_det), out_a.v, out_b.v);
+    }
+    return ok;
+}
+#endif
+
 // a·b − c·d on 4 double lanes as difference_of_products<double> (Kahan's algorithm, FMA).
 inline __m256d kahan_difference_of_products4(__m256d a, __m256d b, __m256d c, __m256d d) noexcept {
     const __m256d cd = _mm256_mul_pd(c, d);
