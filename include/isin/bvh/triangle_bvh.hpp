@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <new>
 #include <type_traits>
 #include <vector>
 
@@ -304,11 +305,19 @@ private:
         detail::RayPacket p;
         const unsigned lanes = detail::make_packet(p, c, n, limit, tree_.bound());
         if (!lanes) return 0;
-        detail::TriangleRay<float> tri[size];
-        Hit<float> best[size];
+        // The leaves' state of the packet's rays only (no constructor runs for the other lanes),
+        // and their nearest hits straight into the caller's array.
+        union Rays {
+            detail::TriangleRay<float> lane[size];
+            Rays() noexcept {}
+        } rays;
+        detail::TriangleRay<float>* const tri = rays.lane;
+        Hit<float>* const best = visit == Visit::nearest ? hits + first : nullptr; // null: no hits asked
         for (unsigned l = lanes; l; l &= l - 1) {
             const int k = detail::lowest_bit(l);
-            tri[k].reset({{c[0][k], c[1][k], c[2][k]}, {c[3][k], c[4][k], c[5][k]}});
+            new (tri + k)
+                detail::TriangleRay<float>(Ray<float>{{c[0][k], c[1][k], c[2][k]}, {c[3][k], c[4][k], c[5][k]}});
+            if constexpr (visit == Visit::nearest) best[k] = Hit<float>{};
         }
         const auto walk = [&](auto cull) {
             constexpr bool culls = decltype(cull)::value;
@@ -356,13 +365,11 @@ private:
             walk(std::true_type{});
         else
             walk(std::false_type{});
-        for (unsigned l = lanes; l; l &= l - 1) {
-            const int k = detail::lowest_bit(l);
-            if constexpr (visit == Visit::nearest)
-                hits[first + std::size_t(k)] = best[k];
-            else
+        if constexpr (visit == Visit::any)
+            for (unsigned l = lanes; l; l &= l - 1) {
+                const int k = detail::lowest_bit(l);
                 blocked[first + std::size_t(k)] = (p.lanes >> k) & 1u ? 0 : 1; // left the packet: blocked
-        }
+            }
         return lanes;
     }
 #endif
