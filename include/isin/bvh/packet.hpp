@@ -175,7 +175,9 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
         p.entry_org[a] = positive ? o_hi : o_lo;
         p.exit_org[a] = positive ? o_lo : o_hi;
         p.inv_lo[a] = lo(p.inv[a]), p.inv_hi[a] = hi(p.inv[a]);
-        p.far_lo[a] = lo(p.inv_far[a]), p.far_hi[a] = hi(p.inv_far[a]);
+        // inv_far = inv·widen rounded, monotonic in inv (widen > 0): its least and greatest
+        // are those of inv times widen, bit for bit.
+        p.far_lo[a] = p.inv_lo[a] * widen, p.far_hi[a] = p.inv_hi[a] * widen;
         // Each ray's fast slab distance p·inv − o·inv is within 6ε(|p| + |o|)|inv| of the exact
         // one (prepare_slab's allowance included), and the interval products within 2u of theirs;
         // |p| ≤ the tree's bound. 32ε covers both with room.

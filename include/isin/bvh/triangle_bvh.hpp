@@ -282,18 +282,7 @@ private:
                                                Hit<float>* hits, std::uint8_t* blocked,
                                                const HitFilter& filter) const noexcept {
         constexpr int size = detail::RayPacket::size;
-        // Incoherent rays leave here, before the packet's set-up: too few share the first's octant.
-        const auto octant = [](const Vertex<float>& d) {
-            return int(std::signbit(d.x)) | int(std::signbit(d.y)) << 1 | int(std::signbit(d.z)) << 2;
-        };
-        const int first_octant = octant(ray_at(first).direction);
-        int same = 1;
-        for (int k = 1; k < n; ++k) {
-            same += octant(ray_at(first + std::size_t(k)).direction) == first_octant;
-            if (k == 3 && same == 1) return 0; // not one of the first three neighbours: incoherent
-        }
-        if (same < detail::packet_min_rays) return 0;
-        alignas(32) float c[6][size]; // the rays, lane by lane
+        alignas(32) float c[6][size]; // the rays, lane by lane (make_packet tells incoherent ones first)
         float limit[size];
         for (int k = 0; k < size; ++k) {
             const std::size_t i = first + std::size_t(k < n ? k : 0);
