@@ -294,23 +294,27 @@ private:
         detail::RayPacket p;
         const unsigned lanes = detail::make_packet(p, c, n, limit, tree_.bound());
         if (!lanes) return 0;
-        // The leaves' state of the packet's rays only (no constructor runs for the other lanes),
-        // and their nearest hits straight into the caller's array.
+        // The leaves' state of a ray is made when it reaches its first leaf (no constructor runs
+        // for the others: most rays of a frame that miss never do), and the nearest hits go
+        // straight into the caller's array.
         union Rays {
             detail::TriangleRay<float> lane[size];
             Rays() noexcept {}
         } rays;
         detail::TriangleRay<float>* const tri = rays.lane;
+        unsigned made = 0;                                                         // the lanes of tri constructed
         Hit<float>* const best = visit == Visit::nearest ? hits + first : nullptr; // null: no hits asked
-        for (unsigned l = lanes; l; l &= l - 1) {
-            const int k = detail::lowest_bit(l);
-            new (tri + k)
-                detail::TriangleRay<float>(Ray<float>{{c[0][k], c[1][k], c[2][k]}, {c[3][k], c[4][k], c[5][k]}});
-            if constexpr (visit == Visit::nearest) best[k] = Hit<float>{};
-        }
+        if constexpr (visit == Visit::nearest)
+            for (unsigned l = lanes; l; l &= l - 1) best[detail::lowest_bit(l)] = Hit<float>{};
         const auto walk = [&](auto cull) {
             constexpr bool culls = decltype(cull)::value;
             detail::walk_packet<visit>(tree_, p, [&](std::uint32_t leaf, unsigned active, float(&t_far)[16]) {
+                for (unsigned fresh = active & ~made; fresh; fresh &= fresh - 1) {
+                    const int k = detail::lowest_bit(fresh);
+                    new (tri + k) detail::TriangleRay<float>(
+                        Ray<float>{{c[0][k], c[1][k], c[2][k]}, {c[3][k], c[4][k], c[5][k]}});
+                }
+                made |= active;
                 unsigned done = 0;
 #if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
                 // Two rays at a time in one register while two are left (test_block_pair).
