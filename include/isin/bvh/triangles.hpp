@@ -48,15 +48,8 @@ struct TriangleRay {
     WatertightShear<T> shear;
     bool sheared = false, usable = false;
 
-    TriangleRay() noexcept = default;
     explicit TriangleRay(const Ray<T>& ray) noexcept
         : org{ray.origin.x, ray.origin.y, ray.origin.z}, dir(ray.direction) {}
-    /// Starts over with `ray`, in place (an array of them need not be copied into).
-    void reset(const Ray<T>& ray) noexcept {
-        org[0] = ray.origin.x, org[1] = ray.origin.y, org[2] = ray.origin.z;
-        dir = ray.direction;
-        sheared = false;
-    }
     /// Sets the shear on first use; false for a zero or NaN direction (no hit then).
     bool ready() noexcept {
         if (!sheared) sheared = true, usable = shear.set(dir);
