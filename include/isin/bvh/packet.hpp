@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "../detail/avx512.hpp"
 #include "traverse.hpp"
 #include "tree.hpp"
 
@@ -222,12 +223,8 @@ inline unsigned packet_rays_entering(const BvhTree<float>::Node& n, int k, const
             t1[a] = _mm512_fmsub_ps(_mm512_set1_ps(plane<float>(n, p.far_plane[a])[k]), _mm512_load_ps(p.inv_far[a]),
                                     _mm512_load_ps(p.org_inv_far[a]));
         }
-        // max/min spelled with a full zeroing mask: GCC 12's _mm512_max_ps warns of an
-        // uninitialised operand of its own (-Wuninitialized); same instruction.
-        const auto max = [](__m512 a, __m512 b) { return _mm512_maskz_max_ps(0xffff, a, b); };
-        const auto min = [](__m512 a, __m512 b) { return _mm512_maskz_min_ps(0xffff, a, b); };
-        const __m512 tn = max(max(t0[0], t0[1]), max(t0[2], _mm512_setzero_ps()));
-        const __m512 tf = min(min(t1[0], t1[1]), min(t1[2], _mm512_load_ps(p.t_far)));
+        const __m512 tn = max16(max16(t0[0], t0[1]), max16(t0[2], _mm512_setzero_ps()));
+        const __m512 tf = min16(min16(t1[0], t1[1]), min16(t1[2], _mm512_load_ps(p.t_far)));
         return unsigned(_mm512_cmp_ps_mask(tn, tf, _CMP_LE_OQ));
     }
 #endif

@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "../detail/attributes.hpp"
+#include "../detail/avx512.hpp"
 
 #define ISIN_DETAIL_TRIANGLES_AVX2 1
 
@@ -152,35 +153,28 @@ inline unsigned test_block_pair(const TriangleBlock<float>& b, const TriangleRay
     const auto both = [](float a, float c) {
         return _mm512_mask_blend_ps(0xff00, _mm512_set1_ps(a), _mm512_set1_ps(c));
     };
-    // maskz forms with full masks here and below: GCC 12's plain ones warn of an uninitialised
-    // operand of their own (-Wmaybe-uninitialized); same instructions.
-    const auto vertex = [&](int v, int axis) {
-        return _mm512_maskz_broadcast_f32x8(0xffff, _mm256_load_ps(b.v[v][axis]));
-    };
     const __m512 ox = both(ra.org[sa.kx], rb.org[sa.kx]), oy = both(ra.org[sa.ky], rb.org[sa.ky]);
     const __m512 oz = both(ra.org[sa.kz], rb.org[sa.kz]);
     const __m512 Sx = both(sa.Sx, sb.Sx), Sy = both(sa.Sy, sb.Sy);
     __m512 x[3], y[3], z[3]; // as Sheared8
     for (int v = 0; v < 3; ++v) {
-        z[v] = _mm512_sub_ps(vertex(v, sa.kz), oz);
-        x[v] = _mm512_fnmadd_ps(Sx, z[v], _mm512_sub_ps(vertex(v, sa.kx), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
-        y[v] = _mm512_fnmadd_ps(Sy, z[v], _mm512_sub_ps(vertex(v, sa.ky), oy));
+        z[v] = _mm512_sub_ps(load8_twice(b.v[v][sa.kz]), oz);
+        x[v] = _mm512_fnmadd_ps(Sx, z[v], _mm512_sub_ps(load8_twice(b.v[v][sa.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+        y[v] = _mm512_fnmadd_ps(Sy, z[v], _mm512_sub_ps(load8_twice(b.v[v][sa.ky]), oy));
     }
     const __m512 U = kahan_difference_of_products16(x[2], y[1], y[2], x[1]); // WBW: U = Cx·By − Cy·Bx
     const __m512 V = kahan_difference_of_products16(x[0], y[2], y[0], x[2]); // WBW: V = Ax·Cy − Ay·Cx
     const __m512 W = kahan_difference_of_products16(x[1], y[0], y[1], x[0]); // WBW: W = Bx·Ay − By·Ax
-    const auto max = [](__m512 p, __m512 q) { return _mm512_maskz_max_ps(0xffff, p, q); };
-    const auto min = [](__m512 p, __m512 q) { return _mm512_maskz_min_ps(0xffff, p, q); };
     const __m512 zero = _mm512_setzero_ps();
     const __m512 det = _mm512_add_ps(_mm512_add_ps(U, V), W);
     // test_block_avx2's trust: every edge function at least 2^-126 in magnitude, |det| < 2^126.
-    const __m512 smallest = min(min(_mm512_abs_ps(U), _mm512_abs_ps(V)), _mm512_abs_ps(W));
+    const __m512 smallest = min16(min16(_mm512_abs_ps(U), _mm512_abs_ps(V)), _mm512_abs_ps(W));
     const unsigned trusted = unsigned(_mm512_cmp_ps_mask(smallest, _mm512_set1_ps(0x1p-126f), _CMP_GE_OQ)) &
                              unsigned(_mm512_cmp_ps_mask(_mm512_abs_ps(det), _mm512_set1_ps(0x1p126f), _CMP_LT_OQ));
     if (trusted != 0xffff) return one_by_one();
     // finish8, on 16 lanes
-    unsigned ok = _mm512_cmp_ps_mask(min(min(U, V), W), zero, _CMP_GE_OQ); // clockwise (§2)
-    if constexpr (!cull) ok |= _mm512_cmp_ps_mask(max(max(U, V), W), zero, _CMP_LE_OQ);
+    unsigned ok = _mm512_cmp_ps_mask(min16(min16(U, V), W), zero, _CMP_GE_OQ); // clockwise (§2)
+    if constexpr (!cull) ok |= _mm512_cmp_ps_mask(max16(max16(U, V), W), zero, _CMP_LE_OQ);
     ok &= _mm512_cmp_ps_mask(det, zero, _CMP_NEQ_OQ);
     if (!ok) return 0;
     const __m512 S = both(sa.Sz, sb.Sz);
@@ -192,12 +186,8 @@ inline unsigned test_block_pair(const TriangleBlock<float>& b, const TriangleRay
     ok &= unsigned(_mm512_cmp_ps_mask(t, zero, _CMP_GT_OQ)) &
           unsigned(_mm512_cmp_ps_mask(t, both(t_max_a, t_max_b), _CMP_LT_OQ));
     if (store && ok) {
-        const auto put = [](__m512 q, float* lo, float* hi) {
-            _mm256_storeu_ps(lo, _mm512_maskz_extractf32x8_ps(0xff, q, 0)),
-                _mm256_storeu_ps(hi, _mm512_maskz_extractf32x8_ps(0xff, q, 1));
-        };
-        put(t, out_a.t, out_b.t), put(_mm512_mul_ps(V, inv_det), out_a.u, out_b.u);
-        put(_mm512_mul_ps(W, inv_det), out_a.v, out_b.v);
+        store_halves(t, out_a.t, out_b.t), store_halves(_mm512_mul_ps(V, inv_det), out_a.u, out_b.u);
+        store_halves(_mm512_mul_ps(W, inv_det), out_a.v, out_b.v);
     }
     return ok;
 }
