@@ -1,0 +1,171 @@
+#pragma once
+/// isin — private: a register of lanes of T with the arithmetic of T (+ − × ÷, unary −,
+/// comparisons into a mask), so that a formula written once as a template runs on one value or
+/// on a whole register (ray_lanes.hpp's filters). The widest the target has: AVX-512 (16 floats,
+/// 8 doubles) or AVX (8 floats, 4 doubles); none elsewhere or with ISIN_FORCE_PURE, where the
+/// callers loop over single values (which optimising compilers may vectorise themselves).
+/// Explicit registers, because GCC does not vectorise such loops at -O2 (its "very cheap" cost
+/// model), the optimisation level of CMake's RelWithDebInfo and of most distributions' packages.
+///
+/// For one value the same functions are plain: lane_abs, lane_max, negate_where.
+#include <cmath>
+#include <cstdint>
+
+#if (defined(__AVX512F__) || defined(__AVX__)) && !defined(ISIN_FORCE_PURE)
+#include <immintrin.h>
+#endif
+
+namespace isin {
+namespace detail {
+
+template <class T>
+T lane_abs(T x) noexcept {
+    return std::fabs(x);
+}
+template <class T>
+T lane_max(T a, T b) noexcept {
+    return a < b ? b : a; // std::max's choice
+}
+template <class T>
+T negate_where(bool m, T x) noexcept {
+    return m ? -x : x;
+}
+
+#if defined(__AVX512F__) && !defined(ISIN_FORCE_PURE)
+#define ISIN_DETAIL_LANE_PACKS 1
+/// A register's comparison result: bit k for lane k.
+template <unsigned Full>
+struct PackMask {
+    unsigned m;
+    [[nodiscard]] std::uint64_t bits() const noexcept { return m; }
+    friend PackMask operator|(PackMask a, PackMask b) noexcept { return {a.m | b.m}; }
+    friend PackMask operator&(PackMask a, PackMask b) noexcept { return {a.m & b.m}; }
+    friend PackMask operator!(PackMask a) noexcept { return {~a.m & Full}; }
+};
+
+template <class T>
+struct Pack;
+
+template <>
+struct Pack<float> {
+    static constexpr int width = 16;
+    using Mask = PackMask<0xffffu>;
+    __m512 v;
+    Pack(float x) noexcept : v(_mm512_set1_ps(x)) {} // NOLINT: implicit, as a float converts
+    explicit Pack(__m512 r) noexcept : v(r) {}
+    static Pack load(const float* p) noexcept { return Pack(_mm512_load_ps(p)); }
+    friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm512_add_ps(a.v, b.v)); }
+    friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm512_sub_ps(a.v, b.v)); }
+    friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm512_mul_ps(a.v, b.v)); }
+    friend Pack operator/(Pack a, Pack b) noexcept { return Pack(_mm512_div_ps(a.v, b.v)); }
+    friend Pack operator-(Pack a) noexcept { return negate_where(Mask{0xffffu}, a); }
+    friend Mask operator<(Pack a, Pack b) noexcept { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ)}; }
+    friend Mask operator>(Pack a, Pack b) noexcept { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ)}; }
+    friend Pack lane_abs(Pack a) noexcept { return Pack(_mm512_abs_ps(a.v)); }
+    // The maskz form: GCC 12 warns about _mm512_max_ps's own uninitialised operand.
+    friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm512_maskz_max_ps(0xffff, a.v, b.v)); }
+    friend Pack negate_where(Mask m, Pack a) noexcept {
+        const __m512i x = _mm512_castps_si512(a.v);
+        return Pack(_mm512_castsi512_ps(_mm512_mask_xor_epi32(x, __mmask16(m.m), x, _mm512_set1_epi32(INT32_MIN))));
+    }
+};
+
+template <>
+struct Pack<double> {
+    static constexpr int width = 8;
+    using Mask = PackMask<0xffu>;
+    __m512d v;
+    Pack(double x) noexcept : v(_mm512_set1_pd(x)) {} // NOLINT: implicit, as a double converts
+    explicit Pack(__m512d r) noexcept : v(r) {}
+    static Pack load(const double* p) noexcept { return Pack(_mm512_load_pd(p)); }
+    friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm512_add_pd(a.v, b.v)); }
+    friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm512_sub_pd(a.v, b.v)); }
+    friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm512_mul_pd(a.v, b.v)); }
+    friend Pack operator/(Pack a, Pack b) noexcept { return Pack(_mm512_div_pd(a.v, b.v)); }
+    friend Pack operator-(Pack a) noexcept { return negate_where(Mask{0xffu}, a); }
+    friend Mask operator<(Pack a, Pack b) noexcept { return {_mm512_cmp_pd_mask(a.v, b.v, _CMP_LT_OQ)}; }
+    friend Mask operator>(Pack a, Pack b) noexcept { return {_mm512_cmp_pd_mask(a.v, b.v, _CMP_GT_OQ)}; }
+    friend Pack lane_abs(Pack a) noexcept { return Pack(_mm512_abs_pd(a.v)); }
+    friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm512_maskz_max_pd(0xff, a.v, b.v)); }
+    friend Pack negate_where(Mask m, Pack a) noexcept {
+        const __m512i x = _mm512_castpd_si512(a.v);
+        return Pack(_mm512_castsi512_pd(_mm512_mask_xor_epi64(x, __mmask8(m.m), x, _mm512_set1_epi64(INT64_MIN))));
+    }
+};
+
+#elif defined(__AVX__) && !defined(ISIN_FORCE_PURE)
+#define ISIN_DETAIL_LANE_PACKS 1
+/// A register's comparison result (of floats, of doubles): all ones in the lanes where it holds.
+template <class T>
+struct PackMask;
+template <>
+struct PackMask<float> {
+    __m256 m;
+    [[nodiscard]] std::uint64_t bits() const noexcept { return std::uint64_t(unsigned(_mm256_movemask_ps(m))); }
+    friend PackMask operator|(PackMask a, PackMask b) noexcept { return {_mm256_or_ps(a.m, b.m)}; }
+    friend PackMask operator&(PackMask a, PackMask b) noexcept { return {_mm256_and_ps(a.m, b.m)}; }
+    friend PackMask operator!(PackMask a) noexcept {
+        return {_mm256_xor_ps(a.m, _mm256_castsi256_ps(_mm256_set1_epi32(-1)))};
+    }
+};
+template <>
+struct PackMask<double> {
+    __m256d m;
+    [[nodiscard]] std::uint64_t bits() const noexcept { return std::uint64_t(unsigned(_mm256_movemask_pd(m))); }
+    friend PackMask operator|(PackMask a, PackMask b) noexcept { return {_mm256_or_pd(a.m, b.m)}; }
+    friend PackMask operator&(PackMask a, PackMask b) noexcept { return {_mm256_and_pd(a.m, b.m)}; }
+    friend PackMask operator!(PackMask a) noexcept {
+        return {_mm256_xor_pd(a.m, _mm256_castsi256_pd(_mm256_set1_epi64x(-1)))};
+    }
+};
+
+template <class T>
+struct Pack;
+
+template <>
+struct Pack<float> {
+    static constexpr int width = 8;
+    using Mask = PackMask<float>;
+    __m256 v;
+    Pack(float x) noexcept : v(_mm256_set1_ps(x)) {} // NOLINT: implicit, as a float converts
+    explicit Pack(__m256 r) noexcept : v(r) {}
+    static Pack load(const float* p) noexcept { return Pack(_mm256_load_ps(p)); }
+    friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm256_add_ps(a.v, b.v)); }
+    friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm256_sub_ps(a.v, b.v)); }
+    friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm256_mul_ps(a.v, b.v)); }
+    friend Pack operator/(Pack a, Pack b) noexcept { return Pack(_mm256_div_ps(a.v, b.v)); }
+    friend Pack operator-(Pack a) noexcept { return Pack(_mm256_xor_ps(a.v, _mm256_set1_ps(-0.0f))); }
+    friend Mask operator<(Pack a, Pack b) noexcept { return {_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ)}; }
+    friend Mask operator>(Pack a, Pack b) noexcept { return {_mm256_cmp_ps(a.v, b.v, _CMP_GT_OQ)}; }
+    friend Pack lane_abs(Pack a) noexcept { return Pack(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), a.v)); }
+    friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm256_max_ps(a.v, b.v)); }
+    friend Pack negate_where(Mask m, Pack a) noexcept {
+        return Pack(_mm256_xor_ps(a.v, _mm256_and_ps(m.m, _mm256_set1_ps(-0.0f))));
+    }
+};
+
+template <>
+struct Pack<double> {
+    static constexpr int width = 4;
+    using Mask = PackMask<double>;
+    __m256d v;
+    Pack(double x) noexcept : v(_mm256_set1_pd(x)) {} // NOLINT: implicit, as a double converts
+    explicit Pack(__m256d r) noexcept : v(r) {}
+    static Pack load(const double* p) noexcept { return Pack(_mm256_load_pd(p)); }
+    friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm256_add_pd(a.v, b.v)); }
+    friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm256_sub_pd(a.v, b.v)); }
+    friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm256_mul_pd(a.v, b.v)); }
+    friend Pack operator/(Pack a, Pack b) noexcept { return Pack(_mm256_div_pd(a.v, b.v)); }
+    friend Pack operator-(Pack a) noexcept { return Pack(_mm256_xor_pd(a.v, _mm256_set1_pd(-0.0))); }
+    friend Mask operator<(Pack a, Pack b) noexcept { return {_mm256_cmp_pd(a.v, b.v, _CMP_LT_OQ)}; }
+    friend Mask operator>(Pack a, Pack b) noexcept { return {_mm256_cmp_pd(a.v, b.v, _CMP_GT_OQ)}; }
+    friend Pack lane_abs(Pack a) noexcept { return Pack(_mm256_andnot_pd(_mm256_set1_pd(-0.0), a.v)); }
+    friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm256_max_pd(a.v, b.v)); }
+    friend Pack negate_where(Mask m, Pack a) noexcept {
+        return Pack(_mm256_xor_pd(a.v, _mm256_and_pd(m.m, _mm256_set1_pd(-0.0))));
+    }
+};
+#endif
+
+} // namespace detail
+} // namespace isin
