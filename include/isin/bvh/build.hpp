@@ -141,6 +141,13 @@ private:
     // is at most sah_depth + 32 levels deep for any input (the traversal stack is sized by it).
     static constexpr int sah_depth = BvhTree<T>::depth_limit - 32;
     static constexpr int bins = 8; // 16 or 32 trace no faster on the vs_embree meshes and build 20-40% slower
+    // Ranges of this many primitives or more are binned into two sets of bins, alternate
+    // primitives, merged after (the same bins): neighbours in a coherent mesh often fall in the
+    // same bins, and with one set each bin's update waits for the one before. Measured: up to
+    // 5-11% faster one-thread builds of the trefoil, the terrain and the 80k icosphere, none on
+    // the random soup; for all nodes (from 2 primitives) the small nodes' extra set of bins
+    // cost more than it saved.
+    static constexpr std::uint32_t two_bin_sets_min = 1024;
 
     // Where a centroid falls among the bins of each axis: ⌊(c − lo)·bins·(1 − ε)/extent⌋, computed
     // from halves (0.5c − 0.5lo) so that no finite coordinates overflow, at most bins − 1. An axis whose extent is 0, or so small that the scale overflows (subnormal
@@ -207,14 +214,20 @@ private:
         Bins bin;
         const Binning binning(centroids);
         const bool binned = depth < sah_depth && binning.any();
-        const auto bin_range = [&](std::uint32_t begin, std::uint32_t end, Bins& into) {
-            for (std::uint32_t i = begin; i < end; ++i) {
-                const Prim& p = prims[i];
-                for (int a = 0; a < 3; ++a) {
-                    Bin& b = into.at[a][binning.bin(p, a)];
-                    b.box.grow(p.lo, p.hi), ++b.n;
-                }
+        const auto bin_one = [&](const Prim& p, Bins& into) {
+            for (int a = 0; a < 3; ++a) {
+                Bin& b = into.at[a][binning.bin(p, a)];
+                b.box.grow(p.lo, p.hi), ++b.n;
             }
+        };
+        const auto bin_range = [&](std::uint32_t begin, std::uint32_t end, Bins& into) {
+            std::uint32_t i = begin;
+            if (end - begin >= two_bin_sets_min) { // alternate primitives into two sets, merged after
+                Bins other;
+                for (; end - i >= 2; i += 2) bin_one(prims[i], into), bin_one(prims[i + 1], other);
+                into.merge(other);
+            }
+            for (; i < end; ++i) bin_one(prims[i], into);
         };
         if (binned && threads_ > 1 && count >= parallel_bin_min) {
             // The first splits, before the queue has work for every thread: binned in chunks
