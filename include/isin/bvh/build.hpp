@@ -253,12 +253,12 @@ private:
             Box4<T> acc; // grown bin by bin as two vector min/max
             std::uint32_t acc_n = 0;
             for (int b = bins - 1; b > 0; --b)
-                acc.grow(axis[b].box), acc_n += axis[b].n, right_area[b] = acc.box().area(), right_n[b] = acc_n;
+                acc.grow(axis[b].box), acc_n += axis[b].n, right_area[b] = acc.area(), right_n[b] = acc_n;
             acc = {}, acc_n = 0;
             for (int b = 0; b < bins - 1; ++b) {
                 acc.grow(axis[b].box), acc_n += axis[b].n;
                 if (acc_n == 0 || right_n[b + 1] == 0) continue;
-                const T left_area = acc.box().area();
+                const T left_area = acc.area();
                 const T cost = left_area * T(acc_n) + right_area[b + 1] * T(right_n[b + 1]);
                 if (cost < best_cost)
                     best_cost = cost, best_axis = a, best_split = b, best_areas = left_area + right_area[b + 1];
