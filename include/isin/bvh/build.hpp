@@ -59,6 +59,7 @@ public:
     struct Prim {
         L4<T> lo, hi, centroid; // lanes x, y, z, unused
         std::uint32_t index;
+        std::uint8_t bin[3]; // its bin on each axis, in the node being split (kept for the partition)
     };
     using Prims = std::vector<Prim, UninitAllocator<Prim>>;
 
@@ -214,9 +215,11 @@ private:
         Bins bin;
         const Binning binning(centroids);
         const bool binned = depth < sah_depth && binning.any();
-        const auto bin_one = [&](const Prim& p, Bins& into) {
+        const auto bin_one = [&](Prim& p, Bins& into) {
             for (int a = 0; a < 3; ++a) {
-                Bin& b = into.at[a][binning.bin(p, a)];
+                const int k = binning.bin(p, a);
+                p.bin[a] = static_cast<std::uint8_t>(k);
+                Bin& b = into.at[a][k];
                 b.box.grow(p.lo, p.hi), ++b.n;
             }
         };
@@ -277,9 +280,9 @@ private:
             const int a = best_axis;
             for (int b = 0; b < bins; ++b)
                 if (bin.at[a][b].n) (b <= best_split ? left_box : right_box).grow(bin.at[a][b].box.box());
-            // The partition, by the binning's own rule (so the sweep's counts), finds the
+            // The partition, by the bins the binning gave (so the sweep's counts), finds the
             // children's centroid bounds on the way: each primitive is tested once.
-            const auto goes_left = [&](const Prim& p) { return binning.bin(p, a) <= best_split; };
+            const auto goes_left = [&](const Prim& p) { return p.bin[a] <= best_split; };
             Box4<T> lc, rc;
             std::uint32_t i = first, j = first + count;
             for (;;) {
