@@ -5,6 +5,7 @@
 #include <limits>
 #include <utility>
 
+#include "detail/attributes.hpp"
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "ray.hpp"
@@ -70,8 +71,11 @@ template <class T>
 namespace detail {
 /// True when the edges e1, e2 span no area: |e1 × e2| lies within the rounding noise of the cross
 /// product (sin of the angle between the edges below ~8ε). Scale-free, overflow-free in max norm.
+/// Always inlined: clang -O2 called it from Möller–Trumbore's hit path, and the note's scene
+/// rendered 1.16× slower for it (42.3–44.0 against 36.6–36.9 ms).
 template <class T>
-[[nodiscard]] inline bool is_degenerate(const Vertex<T>& e1, const Vertex<T>& e2, const Vertex<T>& N) noexcept {
+[[nodiscard]] ISIN_DETAIL_INLINE bool is_degenerate(const Vertex<T>& e1, const Vertex<T>& e2,
+                                                    const Vertex<T>& N) noexcept {
     constexpr T eps = std::numeric_limits<T>::epsilon();
     return !(max_abs(N) > T(8) * eps * max_abs(e1) * max_abs(e2)); // NaN → degenerate
 }
