@@ -149,6 +149,11 @@ private:
     // the random soup; for all nodes (from 2 primitives) the small nodes' extra set of bins
     // cost more than it saved.
     static constexpr std::uint32_t two_bin_sets_min = 1024;
+    // The partition looks at the sides of this many first primitives of a node, and goes
+    // without branches when a quarter of neighbours or more change side (see split). Measured:
+    // the random soup built 1.11-1.38x as fast (1.07-1.09 at two threads); the meshes whose
+    // neighbours share sides, where the plain partition's branches predict well, alike.
+    static constexpr std::uint32_t coin_toss_sample = 32;
 
     // Where a centroid falls among the bins of each axis: ⌊(c − lo)·bins·(1 − ε)/extent⌋, computed
     // from halves (0.5c − 0.5lo) so that no finite coordinates overflow, at most bins − 1. An axis whose extent is 0, or so small that the scale overflows (subnormal
@@ -283,18 +288,31 @@ private:
             // The partition, by the bins the binning gave (so the sweep's counts), finds the
             // children's centroid bounds on the way: each primitive is tested once.
             const auto goes_left = [&](const Prim& p) { return p.bin[a] <= best_split; };
-            Box4<T> lc, rc;
-            std::uint32_t i = first, j = first + count;
-            for (;;) {
-                while (i < j && goes_left(prims[i])) lc.grow(prims[i].centroid, prims[i].centroid), ++i;
-                while (i < j && !goes_left(prims[j - 1])) --j, rc.grow(prims[j].centroid, prims[j].centroid);
-                if (i == j) break;
-                std::swap(prims[i], prims[j - 1]);
-                lc.grow(prims[i].centroid, prims[i].centroid), ++i;
-                --j, rc.grow(prims[j].centroid, prims[j].centroid);
+            Box4<T> side[2]; // the centroid bounds of the left and the right child
+            // Where the first primitives' sides change often (a soup's triangles in random
+            // order), the branches of a plain partition would mispredict half the time.
+            std::uint32_t changes = 0;
+            if (count >= coin_toss_sample)
+                for (std::uint32_t k = first + 1; k < first + coin_toss_sample; ++k)
+                    changes += goes_left(prims[k]) != goes_left(prims[k - 1]) ? 1u : 0u;
+            if (changes >= coin_toss_sample / 4) {
+                std::uint32_t left_count = 0;
+                for (int b = 0; b <= best_split; ++b) left_count += bin.at[a][b].n;
+                mid = first + left_count;
+                partition_without_branches(prims, first, mid, first + count, goes_left, side);
+            } else {
+                std::uint32_t i = first, j = first + count;
+                for (;;) {
+                    while (i < j && goes_left(prims[i])) side[0].grow(prims[i].centroid, prims[i].centroid), ++i;
+                    while (i < j && !goes_left(prims[j - 1])) --j, side[1].grow(prims[j].centroid, prims[j].centroid);
+                    if (i == j) break;
+                    std::swap(prims[i], prims[j - 1]);
+                    side[0].grow(prims[i].centroid, prims[i].centroid), ++i;
+                    --j, side[1].grow(prims[j].centroid, prims[j].centroid);
+                }
+                mid = i;
             }
-            mid = i;
-            left_centroids = lc.box(), right_centroids = rc.box();
+            left_centroids = side[0].box(), right_centroids = side[1].box();
         }
         if (mid == first || mid == first + count) { // deep, or no axis binned: the median of the widest axis
             const Vertex<T> extent = centroids.hi * T(0.5) - centroids.lo * T(0.5);
@@ -318,6 +336,42 @@ private:
         left = {node->left.get(), left_centroids, depth + 1};
         right = {node->right.get(), right_centroids, depth + 1};
         return true;
+    }
+
+    // Partitions prims[first, end) so that the primitives `goes_left` takes, of which there are
+    // mid − first, come first, and grows side[0] and side[1] by the centroids of either side,
+    // without a branch on any primitive's side: misplaced primitives of each side are listed a
+    // block at a time and swapped in pairs (Edelkamp & Weiß, "BlockQuicksort: Avoiding Branch
+    // Mispredictions in Quicksort", 2016). Each side holds as many misplaced primitives as the
+    // other, so the lists pair up; the loop also ends should they not (no progress).
+    template <class GoesLeft>
+    static void partition_without_branches(Prims& prims, std::uint32_t first, std::uint32_t mid, std::uint32_t end,
+                                           const GoesLeft& goes_left, Box4<T> (&side)[2]) {
+        constexpr std::uint32_t block = 64;
+        std::uint32_t misplaced[2][block], listed[2] = {0, 0}, swapped[2] = {0, 0};
+        std::uint32_t next[2] = {first, mid};
+        const std::uint32_t stop[2] = {mid, end};
+        const auto list = [&](int s) { // the next block of side s: its misplaced primitives
+            listed[s] = swapped[s] = 0;
+            const std::uint32_t last = std::min(stop[s], next[s] + block);
+            for (std::uint32_t k = next[s]; k < last; ++k) {
+                const Prim& p = prims[k];
+                const int to = goes_left(p) ? 0 : 1;
+                misplaced[s][listed[s]] = k, listed[s] += to != s ? 1 : 0;
+                side[to].grow(p.centroid, p.centroid);
+            }
+            next[s] = last;
+        };
+        for (;;) {
+            bool progress = false;
+            for (int s = 0; s < 2; ++s)
+                if (swapped[s] == listed[s] && next[s] < stop[s]) list(s), progress = true;
+            const std::uint32_t pairs = std::min(listed[0] - swapped[0], listed[1] - swapped[1]);
+            for (std::uint32_t k = 0; k < pairs; ++k)
+                std::swap(prims[misplaced[0][swapped[0] + k]], prims[misplaced[1][swapped[1] + k]]);
+            swapped[0] += pairs, swapped[1] += pairs;
+            if (pairs == 0 && !progress) return;
+        }
     }
 
     // The binary tree below `at`, on this thread.
