@@ -13,6 +13,8 @@
 
 #if (defined(__AVX512F__) || defined(__AVX__)) && !defined(ISIN_FORCE_PURE)
 #include <immintrin.h>
+
+#include "avx512.hpp"
 #endif
 
 namespace isin {
@@ -62,8 +64,7 @@ struct Pack<float> {
     friend Mask operator<(Pack a, Pack b) noexcept { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ)}; }
     friend Mask operator>(Pack a, Pack b) noexcept { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ)}; }
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm512_abs_ps(a.v)); }
-    // The maskz form: GCC 12 warns about _mm512_max_ps's own uninitialised operand.
-    friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm512_maskz_max_ps(0xffff, a.v, b.v)); }
+    friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(max16(a.v, b.v)); }
     friend Pack negate_where(Mask m, Pack a) noexcept {
         const __m512i x = _mm512_castps_si512(a.v);
         return Pack(_mm512_castsi512_ps(_mm512_mask_xor_epi32(x, __mmask16(m.m), x, _mm512_set1_epi32(INT32_MIN))));
@@ -86,7 +87,7 @@ struct Pack<double> {
     friend Mask operator<(Pack a, Pack b) noexcept { return {_mm512_cmp_pd_mask(a.v, b.v, _CMP_LT_OQ)}; }
     friend Mask operator>(Pack a, Pack b) noexcept { return {_mm512_cmp_pd_mask(a.v, b.v, _CMP_GT_OQ)}; }
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm512_abs_pd(a.v)); }
-    friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm512_maskz_max_pd(0xff, a.v, b.v)); }
+    friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(max8(a.v, b.v)); }
     friend Pack negate_where(Mask m, Pack a) noexcept {
         const __m512i x = _mm512_castpd_si512(a.v);
         return Pack(_mm512_castsi512_pd(_mm512_mask_xor_epi64(x, __mmask8(m.m), x, _mm512_set1_epi64(INT64_MIN))));
