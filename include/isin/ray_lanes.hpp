@@ -25,10 +25,6 @@
 #include <limits>
 #include <type_traits>
 
-#if defined(__AVX512F__) && !defined(ISIN_FORCE_PURE)
-#include <immintrin.h>
-#endif
-
 #include "detail/lane_pack.hpp"
 #include "error_bound.hpp"
 #include "ray.hpp"
@@ -76,17 +72,7 @@ struct RayLanes {
     /// The bits of rays [0, count) set where keep[k] is non-zero.
     [[nodiscard]] std::uint64_t bits(const Flag* keep) const noexcept {
         std::uint64_t m = 0;
-#if defined(__AVX512F__) && !defined(ISIN_FORCE_PURE) // one instruction per block
-        for (std::size_t k = 0; k < padded; k += block) {
-            const __m512i flags = _mm512_load_si512(static_cast<const void*>(keep + k));
-            if constexpr (sizeof(T) == 4)
-                m |= std::uint64_t(_mm512_test_epi32_mask(flags, flags)) << k;
-            else
-                m |= std::uint64_t(_mm512_test_epi64_mask(flags, flags)) << k;
-        }
-#else
         for (std::size_t k = 0; k < padded; ++k) m |= std::uint64_t(keep[k] != 0) << k;
-#endif
         return count == capacity ? m : m & ((std::uint64_t(1) << count) - 1);
     }
 };
