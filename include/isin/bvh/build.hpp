@@ -253,6 +253,7 @@ private:
         // Sweep: cost = Σ area · count over the two sides.
         T best_cost = std::numeric_limits<T>::infinity(), best_areas = best_cost;
         int best_axis = -1, best_split = 0;
+        std::uint32_t best_left_count = 0; // primitives on the left of the best split
         for (int a = 0; a < 3 && binned; ++a) {
             if (!(binning.scale[a] > T(0))) continue;
             const Bin* const axis = bin.at[a];
@@ -269,7 +270,8 @@ private:
                 const T left_area = acc.area();
                 const T cost = left_area * T(acc_n) + right_area[b + 1] * T(right_n[b + 1]);
                 if (cost < best_cost)
-                    best_cost = cost, best_axis = a, best_split = b, best_areas = left_area + right_area[b + 1];
+                    best_cost = cost, best_axis = a, best_split = b, best_areas = left_area + right_area[b + 1],
+                    best_left_count = acc_n;
             }
         }
         // Up to leaf_size triangles cost one 8-lane test as a leaf, as each child would: split
@@ -296,9 +298,7 @@ private:
                 for (std::uint32_t k = first + 1; k < first + coin_toss_sample; ++k)
                     changes += goes_left(prims[k]) != goes_left(prims[k - 1]) ? 1u : 0u;
             if (changes >= coin_toss_sample / 4) {
-                std::uint32_t left_count = 0;
-                for (int b = 0; b <= best_split; ++b) left_count += bin.at[a][b].n;
-                mid = first + left_count;
+                mid = first + best_left_count;
                 partition_without_branches(prims, first, mid, first + count, goes_left, side);
             } else {
                 std::uint32_t i = first, j = first + count;
