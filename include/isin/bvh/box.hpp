@@ -143,13 +143,18 @@ struct Box4 {
 
 // An allocator whose value-less construct() leaves trivial values uninitialised, so that
 // resizing a vector that the build then fills in parallel does not first zero it serially; its
-// large blocks ask for huge pages (detail/huge_pages.hpp).
+// blocks of 2 MiB or more are mapped on their own, on huge pages (detail/huge_pages.hpp).
 template <class T>
 struct UninitAllocator : std::allocator<T> {
     T* allocate(std::size_t n) {
-        T* const p = std::allocator<T>::allocate(n);
-        advise_huge_pages(p, n * sizeof(T));
-        return p;
+        if (maps_huge_pages && n <= std::size_t(-1) / 2 / sizeof(T) && n * sizeof(T) >= huge_page_bytes)
+            return static_cast<T*>(map_huge_pages(n * sizeof(T)));
+        return std::allocator<T>::allocate(n);
+    }
+    void deallocate(T* p, std::size_t n) noexcept {
+        if (maps_huge_pages && n <= std::size_t(-1) / 2 / sizeof(T) && n * sizeof(T) >= huge_page_bytes)
+            return unmap_huge_pages(p, n * sizeof(T));
+        std::allocator<T>::deallocate(p, n);
     }
     template <class U>
     struct rebind {
