@@ -11,6 +11,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <limits>
 #include <new>
@@ -97,6 +98,33 @@ TEST_CASE("Bvh: compiled to the path the build's flags ask for (CI builds each: 
     CHECK(leaf == "vector extensions");
 #endif
 #endif
+}
+
+TEST_CASE("The build's blocks: from 2 MiB mapped on their own, 2 MiB-aligned; smaller ones from the heap") {
+    struct alignas(64) Item {
+        std::uint32_t v[16];
+    };
+    isin::detail::UninitAllocator<Item> alloc;
+    const std::size_t huge = isin::detail::huge_page_bytes / sizeof(Item);
+    for (const std::size_t n : {std::size_t(1), huge - 1, huge, huge + 1, 3 * huge + 77}) {
+        CAPTURE(n);
+        Item* const p = alloc.allocate(n);
+        REQUIRE(p != nullptr);
+        CHECK(reinterpret_cast<std::uintptr_t>(p) % alignof(Item) == 0);
+        if (isin::detail::maps_huge_pages && n >= huge)
+            CHECK(reinterpret_cast<std::uintptr_t>(p) % isin::detail::huge_page_bytes == 0);
+        for (std::size_t i = 0; i < n; ++i) p[i].v[0] = std::uint32_t(i), p[i].v[15] = std::uint32_t(~i);
+        bool same = true;
+        for (std::size_t i = 0; i < n; ++i)
+            same = same && p[i].v[0] == std::uint32_t(i) && p[i].v[15] == std::uint32_t(~i);
+        CHECK(same);
+        alloc.deallocate(p, n);
+    }
+    // No block for a size that cannot be had: an error, not a crash (1 PiB is beyond any address
+    // space a process gets; the second is beyond size_t).
+    if constexpr (sizeof(std::size_t) >= 8)
+        CHECK_THROWS_AS((void)alloc.allocate(std::size_t(std::uint64_t(1) << 50) / sizeof(Item)), std::bad_alloc);
+    CHECK_THROWS_AS((void)alloc.allocate(std::size_t(-1) / 2), std::bad_alloc);
 }
 
 TEST_CASE_TEMPLATE("BVH: nearest hit and any-hit agree with the brute-force watertight loop", T, float, double) {

@@ -14,6 +14,7 @@
 
 #if defined(__linux__)
 #include <sys/mman.h>
+#include <unistd.h>
 #endif
 
 namespace isin::detail {
@@ -37,6 +38,17 @@ inline constexpr bool maps_huge_pages = false;
 #endif
 inline constexpr std::size_t huge_page_bytes = std::size_t(2) << 20;
 
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+// `bytes` rounded up to whole pages of the system (4 KiB, or 16 or 64 KiB on some ARM kernels).
+inline std::size_t mapped_bytes(std::size_t bytes) noexcept {
+    static const std::size_t page = [] {
+        const long p = sysconf(_SC_PAGESIZE);
+        return p > 0 ? std::size_t(p) : std::size_t(4096);
+    }();
+    return (bytes + page - 1) / page * page;
+}
+#endif
+
 /// A block of its own for `bytes` ≥ huge_page_bytes (where maps_huge_pages): mapped from the
 /// kernel, aligned to 2 MiB and advised for huge pages before anything is written to it; freed
 /// with unmap_huge_pages. Throws std::bad_alloc when the kernel has no memory for it. Why not
@@ -48,12 +60,14 @@ inline void* map_huge_pages([[maybe_unused]] std::size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     constexpr std::uintptr_t huge = huge_page_bytes;
     if (bytes > std::size_t(-1) / 2) throw std::bad_alloc();
-    const std::size_t size = (bytes + huge - 1) & ~(huge - 1), slack = huge; // a 2 MiB boundary lies within
-    void* const map = mmap(nullptr, size + slack, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    // Whole pages (the last 2 MiB may stay partly small pages), from a 2 MiB boundary that lies
+    // within the mapping's first 2 MiB.
+    const std::size_t size = mapped_bytes(bytes);
+    void* const map = mmap(nullptr, size + huge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (map == MAP_FAILED) throw std::bad_alloc();
     const auto at = reinterpret_cast<std::uintptr_t>(map), aligned = (at + huge - 1) & ~(huge - 1);
-    if (aligned > at) (void)munmap(map, aligned - at); // the head before the boundary
-    if (at + slack > aligned) (void)munmap(reinterpret_cast<void*>(aligned + size), at + slack - aligned); // the tail
+    if (aligned > at) (void)munmap(map, aligned - at);                                                   // the head
+    if (at + huge > aligned) (void)munmap(reinterpret_cast<void*>(aligned + size), at + huge - aligned); // the tail
     (void)madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);
     return reinterpret_cast<void*>(aligned);
 #else
@@ -62,7 +76,7 @@ inline void* map_huge_pages([[maybe_unused]] std::size_t bytes) {
 }
 inline void unmap_huge_pages([[maybe_unused]] void* data, [[maybe_unused]] std::size_t bytes) noexcept {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    (void)munmap(data, (bytes + huge_page_bytes - 1) & ~(huge_page_bytes - 1));
+    (void)munmap(data, mapped_bytes(bytes));
 #endif
 }
 
