@@ -78,7 +78,8 @@ public:
     }
 
 private:
-    static constexpr std::size_t largest = std::size_t(1) << 15; // nodes: 3 MiB (float) or 5 MiB (double)
+    // Nodes in the largest blocks: 4 MiB, two whole huge pages (detail::mapped_bytes).
+    static constexpr std::size_t largest = (std::size_t(4) << 20) / sizeof(BinaryNode<T>);
     struct Block {
         BinaryNode<T>* nodes;
         std::size_t size;
