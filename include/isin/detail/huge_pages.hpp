@@ -10,6 +10,7 @@
 /// 2 MiB, it does nothing; a refusal changes nothing but the speed.
 #include <cstddef>
 #include <cstdint>
+#include <mutex>
 #include <new>
 
 #if defined(__linux__)
@@ -45,12 +46,63 @@ inline constexpr std::size_t mapped_bytes(std::size_t bytes) noexcept {
     return (bytes + huge_page_bytes - 1) & ~(huge_page_bytes - 1);
 }
 
-/// A block of its own for `bytes` ≥ huge_page_bytes (where maps_huge_pages): mapped from the
-/// kernel, aligned to 2 MiB and advised for huge pages before anything is written to it; freed
-/// with unmap_huge_pages. Throws std::bad_alloc when the kernel has no memory for it. Why not
-/// malloc and advise_huge_pages: after the first block of a size is freed, glibc serves the next
-/// ones from its heaps (its mmap threshold adapts), whose pages were written before and so stay
-/// 4 KiB; from the second build on, the build's arrays had small pages (2-thread builds of the
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+/// Freed blocks kept for the next block of the same size, up to `limit` bytes in all: the builds
+/// of a program that rebuilds (every frame, a scene's commits, a benchmark) then reuse the pages
+/// of the build before, already on huge pages, instead of the kernel zeroing fresh ones (7% of a
+/// two-thread build of the trefoil) and the first writes faulting them in again. Blocks are kept
+/// by exact size only, so a kept block never serves a smaller request; one that would pass the
+/// limit is unmapped. The cache is never destroyed (a Bvh with static storage may free its
+/// blocks after any other static object is gone).
+class KeptBlocks {
+public:
+    static constexpr std::size_t limit = std::size_t(128) << 20;
+    // The program's cache; null only if it could not be made (no memory), then nothing is kept.
+    static KeptBlocks* instance() noexcept {
+        static KeptBlocks* const kept = new (std::nothrow) KeptBlocks;
+        return kept;
+    }
+    // A kept block of exactly `size` mapped bytes, or null.
+    void* take(std::size_t size) noexcept {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        for (int k = count_; k-- > 0;)
+            if (blocks_[k].size == size) {
+                void* const p = blocks_[k].data;
+                blocks_[k] = blocks_[--count_];
+                total_ -= size;
+                return p;
+            }
+        return nullptr;
+    }
+    // Keeps the block (true) or leaves it to the caller to unmap (false: the limit).
+    bool keep(void* data, std::size_t size) noexcept {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        if (count_ == capacity || size > limit - total_) return false;
+        blocks_[count_++] = {data, size};
+        total_ += size;
+        return true;
+    }
+
+private:
+    static constexpr int capacity = 64; // blocks of 2 MiB or more: 128 MiB holds at most 64
+    struct Block {
+        void* data;
+        std::size_t size;
+    };
+    std::mutex mutex_;
+    Block blocks_[capacity] = {};
+    int count_ = 0;
+    std::size_t total_ = 0;
+};
+#endif
+
+/// A block of its own for `bytes` ≥ huge_page_bytes (where maps_huge_pages): a kept one of the same
+/// size (KeptBlocks), or mapped from the kernel, aligned to 2 MiB and advised for huge pages
+/// before anything is written to it; freed with unmap_huge_pages. Its contents are undefined.
+/// Throws std::bad_alloc when the kernel has no memory for it. Why not malloc and
+/// advise_huge_pages: after the first block of a size is freed, glibc serves the next ones from
+/// its heaps (its mmap threshold adapts), whose pages were written before and so stay 4 KiB;
+/// from the second build on, the build's arrays had small pages (2-thread builds of the
 /// trefoil: 47-50 ms in steady state, 39-41 with glibc.malloc.hugetlb=1).
 inline void* map_huge_pages([[maybe_unused]] std::size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
@@ -58,6 +110,8 @@ inline void* map_huge_pages([[maybe_unused]] std::size_t bytes) {
     if (bytes > std::size_t(-1) / 2) throw std::bad_alloc();
     // Whole huge pages, from a 2 MiB boundary that lies within the mapping's first 2 MiB.
     const std::size_t size = mapped_bytes(bytes);
+    if (KeptBlocks* const kept = KeptBlocks::instance())
+        if (void* const p = kept->take(size)) return p;
     void* const map = mmap(nullptr, size + huge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (map == MAP_FAILED) throw std::bad_alloc();
     const auto at = reinterpret_cast<std::uintptr_t>(map), aligned = (at + huge - 1) & ~(huge - 1);
@@ -71,7 +125,10 @@ inline void* map_huge_pages([[maybe_unused]] std::size_t bytes) {
 }
 inline void unmap_huge_pages([[maybe_unused]] void* data, [[maybe_unused]] std::size_t bytes) noexcept {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    (void)munmap(data, mapped_bytes(bytes));
+    const std::size_t size = mapped_bytes(bytes);
+    if (KeptBlocks* const kept = KeptBlocks::instance())
+        if (kept->keep(data, size)) return;
+    (void)munmap(data, size);
 #endif
 }
 
