@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's build table: isin's and Embree's build times (RTC_BUILD_QUALITY_MEDIUM) of each
 # benchmark mesh on 1 and 2 threads, each library alone in a child process of its own
-# (`vs_embree --build-only`), the two libraries' processes alternated; prints the median of 3
+# (`vs_embree --build-only`), the two libraries' processes alternated; prints the median of 5
 # processes of 5 builds each, and the cores kept busy (CPU time / wall time).
 # Usage: scripts/builds.sh [mesh …]   (default: the five benchmark meshes)
 set -euo pipefail
@@ -17,7 +17,7 @@ printf '%-15s %3s | %9s %5s | %9s %5s | %5s\n' mesh thr "isin ms" busy "Embree m
 for mesh in "${meshes[@]}"; do
     for threads in 1 2; do
         isin_ms=() isin_busy=() embree_ms=() embree_busy=()
-        for _ in 1 2 3; do
+        for _ in 1 2 3 4 5; do  # 5: a process that lands on a core the host keeps busy is one of 5
             # BUILD isin_ms isin_busy embree_ms embree_busy …
             read -r _ ms busy _ < <("$run" --build-only --mesh "$mesh" --threads "$threads" --library isin --repeats 5)
             isin_ms+=("$ms") isin_busy+=("$busy")
