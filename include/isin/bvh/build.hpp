@@ -55,7 +55,8 @@ struct BinaryNode {
 // The binary nodes one build thread makes, in blocks it allocates and writes itself (bump
 // allocation; all freed with the pool). Blocks double from about the thread's share of the
 // nodes' expected number up to `largest`, so small builds stay small, and large ones get blocks
-// of 2 MiB or more, which are advised for huge pages like the build's other arrays. Before:
+// of 2 MiB or more, mapped on huge pages of their own like the build's other arrays
+// (UninitAllocator, detail/huge_pages.hpp). Before:
 // two malloc'ed nodes per split, 4 KiB pages in each thread's own heap, handed back to the kernel
 // between builds and faulted in again (2-thread builds of the trefoil: 50-60 ms, against 40-41
 // with glibc's malloc on huge pages, GLIBC_TUNABLES=glibc.malloc.hugetlb=1).

@@ -1,13 +1,16 @@
 #pragma once
-/// isin — private: asks the kernel to back a large block with huge pages (Linux transparent huge
-/// pages, `madvise(MADV_HUGEPAGE)`; Embree does the same for its builds). The Bvh build writes
-/// every byte of its arrays (primitives, nodes, leaf blocks) once, and with 4 KiB pages each
-/// page's first write is a fault: on this project's virtual machine, a third of the one-thread
-/// build time of a 1.3M-triangle mesh (vs_embree --build-only: 1180 → 710 ms with huge pages); with
-/// 2 MiB pages there are 512 times fewer. Where the kernel
-/// has them only on request ("madvise" in /sys/kernel/mm/transparent_hugepage/enabled, the
-/// default of Debian and Ubuntu) nothing else asks for them. Elsewhere, and for blocks under
-/// 2 MiB, it does nothing; a refusal changes nothing but the speed.
+/// isin — private: large blocks on huge pages (Linux transparent huge pages,
+/// `madvise(MADV_HUGEPAGE)`; Embree does the same for its builds). The Bvh build writes every
+/// byte of its arrays (primitives, nodes, leaf blocks) once, and with 4 KiB pages each page's
+/// first write is a fault: on this project's virtual machine, a third of the one-thread build
+/// time of a 1.3M-triangle mesh (vs_embree --build-only: 1180 → 710 ms with huge pages); with
+/// 2 MiB pages there are 512 times fewer. Where the kernel has them only on request ("madvise"
+/// in /sys/kernel/mm/transparent_hugepage/enabled, the default of Debian and Ubuntu) nothing
+/// else asks for them. Two ways: advise_huge_pages for a block that is already allocated (the
+/// tree's vectors), and map_huge_pages / unmap_huge_pages for the build's own blocks of 2 MiB or
+/// more (UninitAllocator), mapped on their own and kept for the next build of the same size
+/// (KeptBlocks). Elsewhere, and for blocks under 2 MiB, nothing changes; a refusal changes
+/// nothing but the speed.
 #include <cstddef>
 #include <cstdint>
 #include <mutex>
@@ -40,7 +43,7 @@ inline constexpr std::size_t huge_page_bytes = std::size_t(2) << 20;
 
 // The size mapped for a block of `bytes`: whole 2 MiB pages. Rounding to small pages instead saves
 // at most 2 MiB a block but leaves the block's last part on 4 KiB pages, and their faults cost
-// more than the rest of the build's memory: the trefoil's one-thread build 67-70 -> 86-87 ms
+// more than the rest of the build's memory: the trefoil's one-thread build 66-69 -> 79-84 ms
 // with 1200 more faults a build (blocks of 3 MiB and 19.2 MiB).
 inline constexpr std::size_t mapped_bytes(std::size_t bytes) noexcept {
     return (bytes + huge_page_bytes - 1) & ~(huge_page_bytes - 1);
