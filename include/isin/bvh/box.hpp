@@ -147,14 +147,16 @@ struct Box4 {
 template <class T>
 struct UninitAllocator : std::allocator<T> {
     T* allocate(std::size_t n) {
-        if (maps_huge_pages && n <= std::size_t(-1) / 2 / sizeof(T) && n * sizeof(T) >= huge_page_bytes)
-            return static_cast<T*>(map_huge_pages(n * sizeof(T)));
+        if (mapped(n)) return static_cast<T*>(map_huge_pages(n * sizeof(T)));
         return std::allocator<T>::allocate(n);
     }
     void deallocate(T* p, std::size_t n) noexcept {
-        if (maps_huge_pages && n <= std::size_t(-1) / 2 / sizeof(T) && n * sizeof(T) >= huge_page_bytes)
-            return unmap_huge_pages(p, n * sizeof(T));
+        if (mapped(n)) return unmap_huge_pages(p, n * sizeof(T));
         std::allocator<T>::deallocate(p, n);
+    }
+    // Whether a block of n values is mapped on its own: one rule for allocate and deallocate.
+    static constexpr bool mapped(std::size_t n) noexcept {
+        return maps_huge_pages && n <= std::size_t(-1) / 2 / sizeof(T) && n * sizeof(T) >= huge_page_bytes;
     }
     template <class U>
     struct rebind {
