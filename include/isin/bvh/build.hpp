@@ -56,10 +56,10 @@ struct BinaryNode {
 // allocation; all freed with the pool). Blocks double from about the thread's share of the
 // nodes' expected number up to `largest`, so small builds stay small, and large ones get blocks
 // of 2 MiB or more, mapped on huge pages of their own like the build's other arrays
-// (UninitAllocator, detail/huge_pages.hpp). Before:
-// two malloc'ed nodes per split, 4 KiB pages in each thread's own heap, handed back to the kernel
-// between builds and faulted in again (2-thread builds of the trefoil: 50-60 ms, against 40-41
-// with glibc's malloc on huge pages, GLIBC_TUNABLES=glibc.malloc.hugetlb=1).
+// (UninitAllocator, detail/huge_pages.hpp). Before: two malloc'ed nodes per split, 4 KiB pages
+// in each thread's own heap, handed back to the kernel between builds and faulted in again
+// (2-thread builds of the trefoil: 50-60 ms, against 40-41 with glibc's malloc on huge pages,
+// GLIBC_TUNABLES=glibc.malloc.hugetlb=1).
 template <class T>
 class alignas(64) NodePool { // 64: the build threads' pools never share a cache line
 public:
@@ -86,7 +86,8 @@ private:
         std::size_t size;
     };
     void grow() {
-        blocks_.reserve(blocks_.size() + 1); // cannot throw after the allocation below
+        if (blocks_.size() == blocks_.capacity()) // so that push_back cannot throw after the allocation
+            blocks_.reserve(2 * blocks_.size() + 4);
         BinaryNode<T>* const nodes = UninitAllocator<BinaryNode<T>>().allocate(next_size_); // huge pages from 2 MiB
         blocks_.push_back({nodes, next_size_});
         used_ = 0, available_ = next_size_;
