@@ -314,3 +314,73 @@ TEST_CASE("Bvh packets: two rays' block test in one register gives each ray's ow
     MESSAGE("two rays in one register need AVX-512 F+DQ: not compiled here");
 #endif
 }
+
+TEST_CASE("Bvh packets: the shears of 16 rays at once are each ray's own, bit for bit") {
+#if defined(ISIN_DETAIL_PACKETS)
+    std::mt19937_64 rng(12);
+    std::uniform_real_distribution<float> uni(-1, 1);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    // Random directions, then ties between the largest components (set() picks by strict
+    // comparisons), signed zeros, NaN and zero directions.
+    const float special[][3] = {{1, 1, 1},           {-1, 1, 1},   {1, -1, -1},    {0.5f, 0.5f, 0.1f},
+                                {-0.5f, 0.5f, 0.1f}, {0.1f, 1, 1}, {0.1f, -1, 1},  {1, 0.1f, -1},
+                                {0, 0, 1},           {0, 0, -1},   {-0.0f, 0, 1},  {0, -0.0f, -0.0f},
+                                {0, 0, 0},           {nan, 1, 0},  {1, 0.5f, nan}, {1e-30f, -1e-30f, 1e-30f}};
+    int compared = 0, unusable = 0;
+    alignas(64) float d[3][16];
+    for (int i = 0; i < 400; ++i) {
+        for (int k = 0; k < 16; ++k)
+            for (int a = 0; a < 3; ++a) d[a][k] = i == 0 ? special[k][a] : uni(rng) * (i % 3 == 0 ? 1e-20f : 1.0f);
+        isin::detail::ShearLanes lanes;
+        isin::detail::set_shears(d[0], d[1], d[2], lanes);
+        for (int k = 0; k < 16; ++k) {
+            isin::detail::WatertightShear<float> one;
+            const bool ok = one.set({d[0][k], d[1][k], d[2][k]});
+            CHECK(((lanes.usable >> k) & 1u) == unsigned(ok));
+            if (!ok) {
+                ++unusable;
+                continue;
+            }
+            const isin::detail::WatertightShear<float> s = lanes.at(k);
+            CHECK((s.kx == one.kx && s.ky == one.ky && s.kz == one.kz));
+            CHECK((same_bits(s.Sx, one.Sx) && same_bits(s.Sy, one.Sy) && same_bits(s.Sz, one.Sz)));
+            ++compared;
+        }
+    }
+    CHECK(unusable == 2); // the two zero directions (NaN along kz passes set(), as d[kz] != 0)
+    CHECK(compared == 400 * 16 - 2);
+#else
+    MESSAGE("packets are not compiled here");
+#endif
+}
+
+TEST_CASE("Bvh packets: rays loaded lane by lane from arrays and from six arrays") {
+#if defined(ISIN_DETAIL_PACKETS)
+    std::mt19937_64 rng(13);
+    std::uniform_real_distribution<float> uni(-100, 100);
+    std::vector<isin::Ray<float>> rays(37);
+    for (auto& r : rays) r = {{uni(rng), uni(rng), uni(rng)}, {uni(rng), uni(rng), uni(rng)}};
+    std::vector<float> c6[6];
+    for (const auto& r : rays)
+        for (int a = 0; a < 3; ++a)
+            c6[a].push_back(isin::component(r.origin, a)), c6[3 + a].push_back(isin::component(r.direction, a));
+    const isin::RaysSoA<float> soa{c6[0].data(), c6[1].data(), c6[2].data(), c6[3].data(), c6[4].data(), c6[5].data()};
+    int wrong = 0;
+    for (std::size_t first : {std::size_t(0), std::size_t(3), std::size_t(21)}) {
+        for (int n : {16, 5, 1}) {
+            alignas(64) float from_array[6][16], from_soa[6][16];
+            isin::detail::load_packet_rays(rays.data(), first, n, from_array);
+            isin::detail::load_packet_rays(soa, first, n, from_soa);
+            for (int k = 0; k < 16; ++k) {
+                const isin::Ray<float>& r = rays[first + std::size_t(k < n ? k : 0)];
+                const float want[6] = {r.origin.x, r.origin.y, r.origin.z, r.direction.x, r.direction.y, r.direction.z};
+                for (int a = 0; a < 6; ++a)
+                    wrong += !same_bits(from_array[a][k], want[a]) + !same_bits(from_soa[a][k], want[a]);
+            }
+        }
+    }
+    CHECK(wrong == 0);
+#else
+    MESSAGE("packets are not compiled here");
+#endif
+}

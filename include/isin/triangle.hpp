@@ -172,13 +172,14 @@ struct WatertightShear {
     int kx = 0, ky = 1, kz = 2;
     T Sx = T(0), Sy = T(0), Sz = T(1);
 
-    /// Sets the shear for direction d; false (and no shear) for a zero or NaN direction.
+    /// Sets the shear for direction d; false (and no shear) for a zero direction. A direction
+    /// with NaN along kz gets NaN shears, with which no triangle is hit (t is NaN).
     bool set(const Vertex<T>& d) noexcept {
         const T ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
         kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
         kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
         const T dz = component(d, kz);
-        if (!(dz != T(0))) return false; // zero or NaN direction
+        if (!(dz != T(0))) return false; // zero direction
         if (dz < T(0)) std::swap(kx, ky);
         Sx = component(d, kx) / dz, Sy = component(d, ky) / dz, Sz = T(1) / dz; // WBW: shear
         return true;

@@ -141,23 +141,23 @@ public:
     /// As above with a bound per ray: hits[i] = intersect(rays[i], t_max[i], filter).
     void intersect(const Ray<T>* rays, std::size_t count, const T* t_max, Hit<T>* hits,
                    const HitFilter& filter = {}) const noexcept {
-        stream<Visit::nearest>([rays](std::size_t i) { return rays[i]; }, count, t_max, hits, nullptr, filter);
+        stream<Visit::nearest>(rays, count, t_max, hits, nullptr, filter);
     }
     /// As above, the rays as separate arrays (RaysSoA); t_max may be null (no bound).
     void intersect(const RaysSoA<T>& rays, std::size_t count, const T* t_max, Hit<T>* hits,
                    const HitFilter& filter = {}) const noexcept {
-        stream<Visit::nearest>([&rays](std::size_t i) { return rays[i]; }, count, t_max, hits, nullptr, filter);
+        stream<Visit::nearest>(rays, count, t_max, hits, nullptr, filter);
     }
     /// Shadow rays of a stream: blocked[i] = occluded(rays[i], t_max[i], filter) (1 or 0) for
     /// i < count; packets as for intersect.
     void occluded(const Ray<T>* rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
                   const HitFilter& filter = {}) const noexcept {
-        stream<Visit::any>([rays](std::size_t i) { return rays[i]; }, count, t_max, nullptr, blocked, filter);
+        stream<Visit::any>(rays, count, t_max, nullptr, blocked, filter);
     }
     /// As above, the rays as separate arrays.
     void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
                   const HitFilter& filter = {}) const noexcept {
-        stream<Visit::any>([&rays](std::size_t i) { return rays[i]; }, count, t_max, nullptr, blocked, filter);
+        stream<Visit::any>(rays, count, t_max, nullptr, blocked, filter);
     }
 
     /// Calls f(index, hit) for every triangle hit with t in (0, t_max), once each, in no
@@ -251,14 +251,14 @@ private:
     // Up to 16 rays of a stream: nearest hits (visit = nearest, into hits) or occlusion (into
     // blocked). Coherent rays go as a packet (packet.hpp), the others one by one.
     // Returns whether a packet was traced.
-    template <Visit visit, class RayAt>
-    bool trace_chunk(const RayAt& ray_at, std::size_t first, int n, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
+    template <Visit visit, class Rays>
+    bool trace_chunk(const Rays& rays, std::size_t first, int n, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
                      const HitFilter& filter, bool try_packet) const noexcept {
         unsigned packed = 0;
 #if defined(ISIN_DETAIL_PACKETS)
         if constexpr (std::is_same_v<T, float>) {
             if (try_packet && n > 1 && !tree_.empty())
-                packed = trace_packet<visit>(ray_at, first, n, t_max, hits, blocked, filter);
+                packed = trace_packet<visit>(rays, first, n, t_max, hits, blocked, filter);
         }
 #else
         (void)try_packet;
@@ -268,51 +268,50 @@ private:
             const std::size_t i = first + std::size_t(k);
             const T limit = t_max ? t_max[i] : std::numeric_limits<T>::infinity();
             if constexpr (visit == Visit::nearest)
-                hits[i] = intersect(ray_at(i), limit, filter);
+                hits[i] = intersect(rays[i], limit, filter);
             else
-                blocked[i] = occluded(ray_at(i), limit, filter) ? 1 : 0;
+                blocked[i] = occluded(rays[i], limit, filter) ? 1 : 0;
         }
         return packed != 0;
     }
 
 #if defined(ISIN_DETAIL_PACKETS)
     // The packet part of trace_chunk (float): returns the rays it traced.
-    template <Visit visit, class RayAt>
-    ISIN_DETAIL_NOINLINE unsigned trace_packet(const RayAt& ray_at, std::size_t first, int n, const float* t_max,
+    template <Visit visit, class Rays>
+    ISIN_DETAIL_NOINLINE unsigned trace_packet(const Rays& rays, std::size_t first, int n, const float* t_max,
                                                Hit<float>* hits, std::uint8_t* blocked,
                                                const HitFilter& filter) const noexcept {
         constexpr int size = detail::RayPacket::size;
-        alignas(32) float c[6][size]; // the rays, lane by lane (make_packet tells incoherent ones first)
+        alignas(64) float c[6][size]; // the rays, lane by lane (make_packet tells incoherent ones first)
+        detail::load_packet_rays(rays, first, n, c);
         float limit[size];
-        for (int k = 0; k < size; ++k) {
-            const std::size_t i = first + std::size_t(k < n ? k : 0);
-            const Ray<float> r = ray_at(i);
-            c[0][k] = r.origin.x, c[1][k] = r.origin.y, c[2][k] = r.origin.z;
-            c[3][k] = r.direction.x, c[4][k] = r.direction.y, c[5][k] = r.direction.z;
-            limit[k] = t_max ? t_max[i] : std::numeric_limits<float>::infinity();
-        }
+        for (int k = 0; k < size; ++k)
+            limit[k] = t_max ? t_max[first + std::size_t(k < n ? k : 0)] : std::numeric_limits<float>::infinity();
         detail::RayPacket p;
         const unsigned lanes = detail::make_packet(p, c, n, limit, tree_.bound());
         if (!lanes) return 0;
         // The leaves' state of a ray is made when it reaches its first leaf (no constructor runs
         // for the others: most rays of a frame that miss never do), and the nearest hits go
         // straight into the caller's array.
-        union Rays {
+        union LeafRays {
             detail::TriangleRay<float> lane[size];
-            Rays() noexcept {}
-        } rays;
-        detail::TriangleRay<float>* const tri = rays.lane;
-        unsigned made = 0;                                                         // the lanes of tri constructed
+            LeafRays() noexcept {}
+        } leaf_rays;
+        detail::TriangleRay<float>* const tri = leaf_rays.lane;
+        unsigned made = 0;         // the lanes of tri constructed
+        detail::ShearLanes shears; // all the rays' shears at once, when the first leaf is reached
         Hit<float>* const best = visit == Visit::nearest ? hits + first : nullptr; // null: no hits asked
         if constexpr (visit == Visit::nearest)
             for (unsigned l = lanes; l; l &= l - 1) best[detail::lowest_bit(l)] = Hit<float>{};
         const auto walk = [&](auto cull) {
             constexpr bool culls = decltype(cull)::value;
             detail::walk_packet<visit>(tree_, p, [&](std::uint32_t leaf, unsigned active, float(&t_far)[16]) {
+                if (!made) detail::set_shears(c[3], c[4], c[5], shears);
                 for (unsigned fresh = active & ~made; fresh; fresh &= fresh - 1) {
                     const int k = detail::lowest_bit(fresh);
-                    new (tri + k) detail::TriangleRay<float>(
-                        Ray<float>{{c[0][k], c[1][k], c[2][k]}, {c[3][k], c[4][k], c[5][k]}});
+                    new (tri + k)
+                        detail::TriangleRay<float>(Ray<float>{{c[0][k], c[1][k], c[2][k]}, {c[3][k], c[4][k], c[5][k]}},
+                                                   shears.at(k), (shears.usable >> k) & 1u);
                 }
                 made |= active;
                 unsigned done = 0;
@@ -386,14 +385,15 @@ private:
         return lanes;
     }
 
-    template <Visit visit, class RayAt>
-    void stream(const RayAt& ray_at, std::size_t count, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
+    // Rays: const Ray<T>* or RaysSoA<T> (ray i is rays[i]).
+    template <Visit visit, class Rays>
+    void stream(const Rays& rays, std::size_t count, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
                 const HitFilter& filter) const noexcept {
         // After a chunk that formed no packet the next three do not try: an incoherent stream
         // (measured: 2-4% of its time in failed attempts) mostly stays so.
         int wait = 0;
         for (std::size_t first = 0; first < count; first += 16) {
-            const bool formed = trace_chunk<visit>(ray_at, first, int(std::min<std::size_t>(16, count - first)), t_max,
+            const bool formed = trace_chunk<visit>(rays, first, int(std::min<std::size_t>(16, count - first)), t_max,
                                                    hits, blocked, filter, wait == 0);
             wait = formed ? 0 : wait > 0 ? wait - 1 : 3;
         }

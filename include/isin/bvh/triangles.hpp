@@ -50,7 +50,11 @@ struct TriangleRay {
 
     explicit TriangleRay(const Ray<T>& ray) noexcept
         : org{ray.origin.x, ray.origin.y, ray.origin.z}, dir(ray.direction) {}
-    /// Sets the shear on first use; false for a zero or NaN direction (no hit then).
+    /// A ray whose shear was set already (a packet's, for all its rays at once), and whether
+    /// set() succeeded.
+    TriangleRay(const Ray<T>& ray, const WatertightShear<T>& s, bool ok) noexcept
+        : org{ray.origin.x, ray.origin.y, ray.origin.z}, dir(ray.direction), shear(s), sheared(true), usable(ok) {}
+    /// Sets the shear on first use; false for a zero direction (no hit then; nor with NaN).
     bool ready() noexcept {
         if (!sheared) sheared = true, usable = shear.set(dir);
         return usable;

@@ -193,6 +193,60 @@ inline unsigned test_block_pair(const TriangleBlock<float>& b, const TriangleRay
 }
 #endif
 
+/// The watertight shears of 16 rays (a packet's), lane by lane what WatertightShear::set
+/// computes: the axes in k[0..2] (kx, ky, kz), Sx, Sy, Sz in S[0..2], and in `usable` the lanes
+/// whose set() would succeed (d[kz] != 0: true for NaN, as there).
+struct ShearLanes {
+    alignas(32) float S[3][16];
+    alignas(32) std::int32_t k[3][16];
+    unsigned usable = 0;
+    WatertightShear<float> at(int lane) const noexcept {
+        WatertightShear<float> s;
+        s.kx = k[0][lane], s.ky = k[1][lane], s.kz = k[2][lane];
+        s.Sx = S[0][lane], s.Sy = S[1][lane], s.Sz = S[2][lane];
+        return s;
+    }
+};
+
+/// Fills `out` from 16 directions (x, y, z lane by lane, 32-byte aligned), eight lanes at a time.
+inline void set_shears(const float* x, const float* y, const float* z, ShearLanes& out) noexcept {
+    const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)), zero = _mm256_setzero_ps();
+    const __m256i i0 = _mm256_setzero_si256(), i1 = _mm256_set1_epi32(1), i2 = _mm256_set1_epi32(2);
+    out.usable = 0;
+    for (int g = 0; g < 16; g += 8) {
+        const __m256 dx = _mm256_load_ps(x + g), dy = _mm256_load_ps(y + g), dz = _mm256_load_ps(z + g);
+        const __m256 ax = _mm256_and_ps(dx, magnitude), ay = _mm256_and_ps(dy, magnitude),
+                     az = _mm256_and_ps(dz, magnitude);
+        // kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2), as set()
+        const __m256 x_over_y = _mm256_cmp_ps(ax, ay, _CMP_GT_OQ);
+        const __m256 z_is_x = _mm256_and_ps(x_over_y, _mm256_cmp_ps(ax, az, _CMP_GT_OQ));
+        const __m256 z_is_y = _mm256_andnot_ps(x_over_y, _mm256_cmp_ps(ay, az, _CMP_GT_OQ));
+        // the components along kz, kx, ky before the swap: kz = 0 → (x; y, z), 1 → (y; z, x), 2 → (z; x, y)
+        const __m256 along = _mm256_blendv_ps(_mm256_blendv_ps(dz, dy, z_is_y), dx, z_is_x);
+        __m256 across_x = _mm256_blendv_ps(_mm256_blendv_ps(dx, dz, z_is_y), dy, z_is_x);
+        __m256 across_y = _mm256_blendv_ps(_mm256_blendv_ps(dy, dx, z_is_y), dz, z_is_x);
+        __m256i kz = _mm256_blendv_epi8(_mm256_blendv_epi8(i2, i1, _mm256_castps_si256(z_is_y)), i0,
+                                        _mm256_castps_si256(z_is_x));
+        __m256i kx = _mm256_blendv_epi8(_mm256_blendv_epi8(i0, i2, _mm256_castps_si256(z_is_y)), i1,
+                                        _mm256_castps_si256(z_is_x));
+        __m256i ky = _mm256_blendv_epi8(_mm256_blendv_epi8(i1, i0, _mm256_castps_si256(z_is_y)), i2,
+                                        _mm256_castps_si256(z_is_x));
+        // d[kz] < 0: kx and ky swap (the winding stays clockwise)
+        const __m256 negative = _mm256_cmp_ps(along, zero, _CMP_LT_OQ);
+        const __m256 swapped_x = _mm256_blendv_ps(across_x, across_y, negative);
+        across_y = _mm256_blendv_ps(across_y, across_x, negative), across_x = swapped_x;
+        const __m256i swapped_kx = _mm256_blendv_epi8(kx, ky, _mm256_castps_si256(negative));
+        ky = _mm256_blendv_epi8(ky, kx, _mm256_castps_si256(negative)), kx = swapped_kx;
+        _mm256_store_ps(out.S[0] + g, _mm256_div_ps(across_x, along)); // WBW: shear
+        _mm256_store_ps(out.S[1] + g, _mm256_div_ps(across_y, along));
+        _mm256_store_ps(out.S[2] + g, _mm256_div_ps(_mm256_set1_ps(1.0f), along));
+        _mm256_store_si256(reinterpret_cast<__m256i*>(out.k[0] + g), kx);
+        _mm256_store_si256(reinterpret_cast<__m256i*>(out.k[1] + g), ky);
+        _mm256_store_si256(reinterpret_cast<__m256i*>(out.k[2] + g), kz);
+        out.usable |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(along, zero, _CMP_NEQ_UQ))) << g; // set(): d[kz] != 0
+    }
+}
+
 // a·b − c·d on 4 double lanes as difference_of_products<double> (Kahan's algorithm, FMA).
 inline __m256d kahan_difference_of_products4(__m256d a, __m256d b, __m256d c, __m256d d) noexcept {
     const __m256d cd = _mm256_mul_pd(c, d);
