@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "color.hpp"
+#include "detail/attributes.hpp"
 #include "triangle.hpp"
 #include "vec.hpp"
 
@@ -104,6 +105,43 @@ inline std::uint32_t fan_root(std::vector<std::uint32_t>& parent, std::uint32_t 
 /// Vertices with up to this many corners find shared edges by comparing all pairs, others by sorting.
 inline constexpr std::uint32_t small_fan = 16;
 
+/// A face of compute_normals in W: its corners V, unit normal n̂ = N / |N| and |N|.
+template <class W>
+struct NormalFacet {
+    Vertex<W> V[3], n_hat;
+    W len;
+};
+
+// compute_normals' arithmetic per face, per corner and per sum, out of line: its paths with and
+// without creases call the same code, so they give the same bits whatever FMA contraction the
+// compiler would choose at each call site (g++ -O3 -march=native contracted them differently).
+
+/// §2 for a triangle: fills F; false for a face with zero area or a NaN, which contributes nothing.
+template <class W, class T>
+ISIN_DETAIL_NOINLINE bool normal_facet(const Triangle<T>& tri, NormalFacet<W>& F) noexcept {
+    const auto wide = [](const Vertex<T>& a) { return Vertex<W>{W(a.x), W(a.y), W(a.z)}; };
+    F.V[0] = wide(tri.v0), F.V[1] = wide(tri.v1), F.V[2] = wide(tri.v2);
+    const Vertex<W> N = cross(F.V[1] - F.V[0], F.V[2] - F.V[0]); // §2: N = (V1−V0) × (V2−V0), |N| = 2·area
+    F.len = length(N);
+    if (!(F.len > W(0)) || !std::isfinite(F.len)) return false;
+    F.n_hat = N / F.len; // T&W: unit facet normal n̂ = N / |N|
+    return true;
+}
+/// T&W: corner j's term α·n̂ of face F.
+template <class W>
+ISIN_DETAIL_NOINLINE Vertex<W> corner_term(const NormalFacet<W>& F, std::size_t j) noexcept {
+    const Vertex<W> e1 = F.V[(j + 1) % 3] - F.V[j], e2 = F.V[(j + 2) % 3] - F.V[j];
+    // T&W: α = angle between the two edges at the corner, there arccos(e1·e2 / |e1||e2|); here
+    // atan2(|e1 × e2|, e1·e2) with |e1 × e2| = |N|: no roots, accurate near 0 and π.
+    const W alpha = std::atan2(F.len, dot(e1, e2));
+    return alpha * F.n_hat;
+}
+/// T&W: a vertex normal from its sum, Σ α·n̂ / |Σ α·n̂|.
+template <class W>
+ISIN_DETAIL_NOINLINE Vertex<W> unit_sum(const Vertex<W>& sum) noexcept {
+    return normalize(sum);
+}
+
 } // namespace detail
 
 /// Replaces mesh.normals by angle-weighted vertex normals (Thürmer & Wüthrich 1998), unit, on the
@@ -143,28 +181,11 @@ void compute_normals(Mesh<T>& mesh, std::common_type_t<T> crease_angle_degrees =
     constexpr std::size_t max_u32 = std::numeric_limits<U32>::max();
     if (nF > max_u32 / 3) throw std::length_error("isin::compute_normals: more than 2^32 corners");
 
-    // §2 for face f: its corners V and unit normal n̂ = N / |N|, or false for a face with zero area or a
-    // NaN, which contributes nothing. Computed where needed, not stored.
-    struct Facet {
-        Vertex<W> V[3], n_hat;
-        W len;
-    };
-    const auto facet = [&](std::size_t f, Facet& F) {
-        const Triangle<T> tri = mesh.triangle(f);
-        F.V[0] = wide(tri.v0), F.V[1] = wide(tri.v1), F.V[2] = wide(tri.v2);
-        const Vertex<W> N = cross(F.V[1] - F.V[0], F.V[2] - F.V[0]); // §2: N = (V1−V0) × (V2−V0), |N| = 2·area
-        F.len = length(N);
-        if (!(F.len > W(0)) || !std::isfinite(F.len)) return false;
-        F.n_hat = N / F.len; // T&W: unit facet normal n̂ = N / |N|
-        return true;
-    };
-    const auto term = [&](const Facet& F, std::size_t j) { // T&W: corner j's term α·n̂
-        const Vertex<W> e1 = F.V[(j + 1) % 3] - F.V[j], e2 = F.V[(j + 2) % 3] - F.V[j];
-        // T&W: α = angle between the two edges at the corner, there arccos(e1·e2 / |e1||e2|); here
-        // atan2(|e1 × e2|, e1·e2) with |e1 × e2| = |N|: no roots, accurate near 0 and π.
-        const W alpha = std::atan2(F.len, dot(e1, e2));
-        return narrow(alpha * F.n_hat);
-    };
+    // Face f (§2), computed where needed, not stored; corner j's term; a sum made unit.
+    using Facet = detail::NormalFacet<W>;
+    const auto facet = [&](std::size_t f, Facet& F) { return detail::normal_facet(mesh.triangle(f), F); };
+    const auto term = [&](const Facet& F, std::size_t j) { return narrow(detail::corner_term(F, j)); };
+    const auto unit = [&](const Vertex<T>& sum) { return detail::unit_sum(wide(sum)); };
 
     std::vector<Vertex<T>> normals(nV, zero);
     Facet F{};
@@ -172,7 +193,7 @@ void compute_normals(Mesh<T>& mesh, std::common_type_t<T> crease_angle_degrees =
         for (std::size_t f = 0; f < nF; ++f)
             if (facet(f, F))
                 for (std::size_t j = 0; j < 3; ++j) normals[mesh.indices[f][j]] += term(F, j); // T&W: Σ α·n̂
-        for (Vertex<T>& n : normals) n = narrow(normalize(wide(n))); // T&W: Σ α·n̂ / |Σ α·n̂|
+        for (Vertex<T>& n : normals) n = narrow(unit(n)); // T&W: Σ α·n̂ / |Σ α·n̂|
         mesh.normals = std::move(normals);
         return;
     }
@@ -255,9 +276,9 @@ void compute_normals(Mesh<T>& mesh, std::common_type_t<T> crease_angle_degrees =
         // bowtie of one surface) merge, each into the first kept fan whose accumulated normal is that close.
         keep.clear();
         for (U32 m = 0; m < U32(sum.size()); ++m) {
-            const Vertex<W> n_m = normalize(wide(sum[m]));
+            const Vertex<W> n_m = unit(sum[m]);
             U32 q = 0;
-            while (q < keep.size() && !(dot(normalize(wide(sum[keep[q]])), n_m) >= cos_limit)) ++q;
+            while (q < keep.size() && !(dot(unit(sum[keep[q]]), n_m) >= cos_limit)) ++q;
             if (q < keep.size())
                 sum[keep[q]] += sum[m];
             else
@@ -269,10 +290,10 @@ void compute_normals(Mesh<T>& mesh, std::common_type_t<T> crease_angle_degrees =
             throw std::length_error("isin::compute_normals: more than 2^32 vertices after splitting");
         for (U32 i = 0; i < k; ++i)
             if (const U32 m = merged[label[i]]; m > 0) moved.emplace_back(corner[i], U32(first_copy + m - 1));
-        normals[v] = narrow(normalize(wide(sum[0]))); // T&W: Σ α·n̂ / |Σ α·n̂|
+        normals[v] = narrow(unit(sum[0])); // T&W: Σ α·n̂ / |Σ α·n̂|
         for (std::size_t q = 1; q < keep.size(); ++q) {
             copy_of.push_back(U32(v));
-            normals.push_back(narrow(normalize(wide(sum[keep[q]]))));
+            normals.push_back(narrow(unit(sum[keep[q]])));
         }
     }
 
