@@ -125,15 +125,19 @@ inline float lanes_max(__m256 a, __m256 b) noexcept {
 }
 
 /// Sets up `p` from the rays in `c` (origin x, y, z, direction x, y, z; lane k = ray k < n ≤ 16)
-/// and their bounds t_max[0, n). First the packet: the rays with a finite, non-zero direction
+/// and their bounds t_max[0, n) (t_max holds 16; lanes from n on are left out). First the packet: the rays with a finite, non-zero direction
 /// and t_max > 0 that share the first such ray's octant and lie within packet_cone_cos of its
 /// direction; then, eight lanes at a time, their slab constants by prepare_slab's rules (so as
 /// conservative), dropping any whose products could overflow (prepare_slab's robust form).
 /// Returns the rays in the packet (p.lanes), at least packet_min_rays, or 0; the others are for
 /// the single-ray path.
-inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], int n, const float* t_max,
-                            float bound) noexcept {
-    for (int k = 0; k < RayPacket::size; ++k) p.t_far[k] = k < n ? t_max[k] : -1.0f;
+inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], int n,
+                            const float (&t_max)[RayPacket::size], float bound) noexcept {
+    for (int g = 0; g < RayPacket::size; g += 8) { // t_far = lane < n ? t_max : −1, eight lanes at a time
+        const __m256 within = _mm256_castsi256_ps(
+            _mm256_cmpgt_epi32(_mm256_set1_epi32(n - g), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+        _mm256_store_ps(p.t_far + g, _mm256_blendv_ps(_mm256_set1_ps(-1.0f), _mm256_loadu_ps(t_max + g), within));
+    }
     const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)), zero = _mm256_setzero_ps();
     // The rays that may join, and their octants (sign bits): cheap tests first, so that an
     // incoherent stream costs little here.

@@ -284,9 +284,14 @@ private:
         constexpr int size = detail::RayPacket::size;
         alignas(64) float c[6][size]; // the rays, lane by lane (make_packet tells incoherent ones first)
         detail::load_packet_rays(rays, first, n, c);
-        float limit[size];
-        for (int k = 0; k < size; ++k)
-            limit[k] = t_max ? t_max[first + std::size_t(k < n ? k : 0)] : std::numeric_limits<float>::infinity();
+        alignas(32) float limit[size];
+        if (t_max && n == size) {
+            _mm256_store_ps(limit, _mm256_loadu_ps(t_max + first));
+            _mm256_store_ps(limit + 8, _mm256_loadu_ps(t_max + first + 8));
+        } else {
+            for (int k = 0; k < size; ++k)
+                limit[k] = t_max ? t_max[first + std::size_t(k < n ? k : 0)] : std::numeric_limits<float>::infinity();
+        }
         detail::RayPacket p;
         const unsigned lanes = detail::make_packet(p, c, n, limit, tree_.bound());
         if (!lanes) return 0;
