@@ -125,9 +125,9 @@ inline float lanes_max(__m256 a, __m256 b) noexcept {
 }
 
 /// Sets up `p` from the rays in `c` (origin x, y, z, direction x, y, z; lane k = ray k < n ≤ 16)
-/// and their bounds t_max[0, n) (t_max holds 16; lanes from n on are left out). First the packet: the rays with a finite, non-zero direction
-/// and t_max > 0 that share the first such ray's octant and lie within packet_cone_cos of its
-/// direction; then, eight lanes at a time, their slab constants by prepare_slab's rules (so as
+/// and their bounds t_max[0, n) (all 16 are read; lanes from n on are left out). First the
+/// packet: the rays with a finite, non-zero direction and t_max > 0 that share the first such
+/// ray's octant and lie within packet_cone_cos of its direction; then, eight lanes at a time, their slab constants by prepare_slab's rules (so as
 /// conservative), dropping any whose products could overflow (prepare_slab's robust form).
 /// Returns the rays in the packet (p.lanes), at least packet_min_rays, or 0; the others are for
 /// the single-ray path.
@@ -388,8 +388,8 @@ void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
             // Each ray's own test: the children one enters. With one origin, inner children
             // take the interval test's word (a frustum's: one ray's entry is seldom dropped
             // where the packet's is not) and the rays' tests wait for the leaves. Measured,
-            // primary rays, same process, medians of 11: 1.03-1.09× faster on the icospheres,
-            // the trefoil and the soup; the terrain 0.96-1.11× over five runs.
+            // primary rays on the five benchmark meshes, same process, medians of 9-11, four
+            // runs: 0.96-1.17× as fast as with every ray's test, most runs 1.02-1.09×.
             for (unsigned m = mask; m; m &= m - 1) {
                 const int k = lowest_bit(m);
                 rays[k] = p.one_origin && !(n.child[k] & leaf_bit) ? e.rays & p.lanes
