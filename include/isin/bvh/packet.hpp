@@ -127,8 +127,9 @@ inline float lanes_max(__m256 a, __m256 b) noexcept {
 /// Sets up `p` from the rays in `c` (origin x, y, z, direction x, y, z; lane k = ray k < n ≤ 16)
 /// and their bounds t_max[0, n) (all 16 are read; lanes from n on are left out). First the
 /// packet: the rays with a finite, non-zero direction and t_max > 0 that share the first such
-/// ray's octant and lie within packet_cone_cos of its direction; then, eight lanes at a time, their slab constants by prepare_slab's rules (so as
-/// conservative), dropping any whose products could overflow (prepare_slab's robust form).
+/// ray's octant and lie within packet_cone_cos of its direction; then, eight lanes at a time,
+/// their slab constants by prepare_slab's rules (so as conservative), dropping any whose products
+/// could overflow (prepare_slab's robust form).
 /// Returns the rays in the packet (p.lanes), at least packet_min_rays, or 0; the others are for
 /// the single-ray path.
 inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], int n,
