@@ -285,12 +285,14 @@ private:
         alignas(64) float c[6][size]; // the rays, lane by lane (make_packet tells incoherent ones first)
         detail::load_packet_rays(rays, first, n, c);
         alignas(32) float limit[size];
-        if (t_max && n == size) {
+        if (!t_max) {
+            _mm256_store_ps(limit, _mm256_set1_ps(std::numeric_limits<float>::infinity()));
+            _mm256_store_ps(limit + 8, _mm256_set1_ps(std::numeric_limits<float>::infinity()));
+        } else if (n == size) {
             _mm256_store_ps(limit, _mm256_loadu_ps(t_max + first));
             _mm256_store_ps(limit + 8, _mm256_loadu_ps(t_max + first + 8));
         } else {
-            for (int k = 0; k < size; ++k)
-                limit[k] = t_max ? t_max[first + std::size_t(k < n ? k : 0)] : std::numeric_limits<float>::infinity();
+            for (int k = 0; k < size; ++k) limit[k] = t_max[first + std::size_t(k < n ? k : 0)];
         }
         detail::RayPacket p;
         const unsigned lanes = detail::make_packet(p, c, n, limit, tree_.bound());
