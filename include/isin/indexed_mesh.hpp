@@ -116,11 +116,12 @@ struct NormalFacet {
 // without creases call the same code, so they give the same bits whatever FMA contraction the
 // compiler would choose at each call site (g++ -O3 -march=native contracted them differently).
 
-/// §2 for a triangle: fills F; false for a face with zero area or a NaN, which contributes nothing.
-template <class W, class T>
-ISIN_DETAIL_NOINLINE bool normal_facet(const Triangle<T>& tri, NormalFacet<W>& F) noexcept {
-    const auto wide = [](const Vertex<T>& a) { return Vertex<W>{W(a.x), W(a.y), W(a.z)}; };
-    F.V[0] = wide(tri.v0), F.V[1] = wide(tri.v1), F.V[2] = wide(tri.v2);
+/// §2 for a triangle's corners V0, V1, V2 (in W): fills F; false for a face with zero area or a
+/// NaN, which contributes nothing.
+template <class W>
+ISIN_DETAIL_NOINLINE bool normal_facet(const Vertex<W>& V0, const Vertex<W>& V1, const Vertex<W>& V2,
+                                       NormalFacet<W>& F) noexcept {
+    F.V[0] = V0, F.V[1] = V1, F.V[2] = V2;
     const Vertex<W> N = cross(F.V[1] - F.V[0], F.V[2] - F.V[0]); // §2: N = (V1−V0) × (V2−V0), |N| = 2·area
     F.len = length(N);
     if (!(F.len > W(0)) || !std::isfinite(F.len)) return false;
@@ -183,7 +184,10 @@ void compute_normals(Mesh<T>& mesh, std::common_type_t<T> crease_angle_degrees =
 
     // Face f (§2), computed where needed, not stored; corner j's term; a sum made unit.
     using Facet = detail::NormalFacet<W>;
-    const auto facet = [&](std::size_t f, Facet& F) { return detail::normal_facet(mesh.triangle(f), F); };
+    const auto facet = [&](std::size_t f, Facet& F) {
+        const Triangle<T> tri = mesh.triangle(f);
+        return detail::normal_facet(wide(tri.v0), wide(tri.v1), wide(tri.v2), F);
+    };
     const auto term = [&](const Facet& F, std::size_t j) { return narrow(detail::corner_term(F, j)); };
     const auto unit = [&](const Vertex<T>& sum) { return detail::unit_sum(wide(sum)); };
 
