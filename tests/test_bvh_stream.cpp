@@ -315,6 +315,115 @@ TEST_CASE("Bvh packets: two rays' block test in one register gives each ray's ow
 #endif
 }
 
+TEST_CASE("Bvh packets: a block's test with the rays in lanes gives each ray's own test bit for bit") {
+#if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
+    using Block = isin::detail::TriangleBlock<float>;
+    using Ray = isin::detail::TriangleRay<float>;
+    using Hits = isin::detail::LaneHits<float>;
+    std::mt19937_64 rng(13);
+    std::uniform_real_distribution<float> uni(-1, 1);
+    // Ordinary scales, and products below 2^-126 or beyond 2^126 (blocks test_block_avx2 does not
+    // trust for a ray: it then tests them exactly, and test_block_rays leaves those rays out).
+    const float scales[] = {1.0f, 1.0f, 1.0f, 1e-22f, 1e21f};
+    const float inf = std::numeric_limits<float>::infinity();
+    int compared = 0, hit_rays = 0, untrusted_rays = 0, skipped = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const float s = scales[i % 5];
+        const int live = 1 + int(rng() % 8); // the rest is padding: lane 0 again
+        Block b;
+        for (int k = 0; k < 8; ++k) {
+            for (int v = 0; v < 3; ++v)
+                for (int a = 0; a < 3; ++a)
+                    b.v[v][a][k] = k < live ? s * (uni(rng) + (a == 2 ? 3.0f : 0.0f)) : b.v[v][a][0];
+            b.primitive[k] = k < live ? std::uint32_t(7 * k + 3) : b.primitive[0];
+        }
+        // Two triangles at the same place (ties in t: the lower index wins), now and then.
+        if (live > 2 && i % 6 == 0)
+            for (int v = 0; v < 3; ++v)
+                for (int a = 0; a < 3; ++a) b.v[v][a][2] = b.v[v][a][1];
+        std::uint8_t skip[64] = {};
+        const bool skipping = i % 4 == 1;
+        if (skipping)
+            for (auto& m : skip) m = rng() % 3 == 0;
+        // 16 rays towards a lane's centroid from one origin or spread ones, one of them from a
+        // vertex (edge functions of zero: not trusted); their shears may permute the axes apart.
+        const int aim = int(rng() % std::uint64_t(live));
+        const isin::Vertex<float> c{(b.v[0][0][aim] + b.v[1][0][aim] + b.v[2][0][aim]) / 3,
+                                    (b.v[0][1][aim] + b.v[1][1][aim] + b.v[2][1][aim]) / 3,
+                                    (b.v[0][2][aim] + b.v[1][2][aim] + b.v[2][2][aim]) / 3};
+        const isin::Vertex<float> o{s * 0.1f * uni(rng), s * 0.1f * uni(rng), s * 0.1f * uni(rng)};
+        std::vector<Ray> rays;
+        float t_max[16];
+        for (int j = 0; j < 16; ++j) {
+            const isin::Vertex<float> jitter{0.3f * uni(rng), 0.3f * uni(rng), 0.3f * uni(rng)};
+            const isin::Vertex<float> corner{b.v[0][0][aim], b.v[0][1][aim], b.v[0][2][aim]};
+            const isin::Vertex<float> origin = j == 5 ? corner : i % 2 ? o : o + jitter * (0.1f * s);
+            const isin::Vertex<float> target = c + jitter * s;
+            rays.emplace_back(isin::Ray<float>{origin, target - origin});
+            t_max[j] = j % 3 ? inf : 0.9f + 0.1f * uni(rng);
+        }
+        // The group of ray 0's axes, as rays_in_lanes makes it.
+        isin::detail::ShearedRays r;
+        r.kx = rays[0].shear.kx, r.ky = rays[0].shear.ky, r.kz = rays[0].shear.kz;
+        alignas(64) float lane[7][16];
+        unsigned group = 0;
+        for (int j = 0; j < 16; ++j) {
+            Ray& q = rays[std::size_t(j)];
+            if (q.ready() && q.shear.kx == r.kx && q.shear.ky == r.ky && q.shear.kz == r.kz) group |= 1u << j;
+            lane[0][j] = q.org[r.kx], lane[1][j] = q.org[r.ky], lane[2][j] = q.org[r.kz];
+            lane[3][j] = q.shear.Sx, lane[4][j] = q.shear.Sy, lane[5][j] = q.shear.Sz, lane[6][j] = t_max[j];
+        }
+        r.ox = _mm512_load_ps(lane[0]), r.oy = _mm512_load_ps(lane[1]), r.oz = _mm512_load_ps(lane[2]);
+        r.Sx = _mm512_load_ps(lane[3]), r.Sy = _mm512_load_ps(lane[4]), r.Sz = _mm512_load_ps(lane[5]);
+        r.t_max = _mm512_load_ps(lane[6]);
+        const auto check = [&](auto cull) {
+            constexpr bool culls = decltype(cull)::value;
+            isin::detail::BlockHitLanes nearest, unused;
+            unsigned untrusted = 0, untrusted_any = 0;
+            const unsigned hit =
+                isin::detail::test_block_rays<culls, true>(b, r, group, skipping ? skip : nullptr, nearest, untrusted);
+            const unsigned any = isin::detail::test_block_rays<culls, false>(b, r, group, skipping ? skip : nullptr,
+                                                                             unused, untrusted_any);
+            CHECK(any == hit);
+            CHECK(untrusted_any == untrusted);
+            CHECK((hit & ~group) == 0);
+            CHECK((untrusted & ~group) == 0);
+            alignas(64) float t[16], u[16], v[16];
+            alignas(64) std::uint32_t index[16];
+            _mm512_store_ps(t, nearest.t), _mm512_store_ps(u, nearest.u), _mm512_store_ps(v, nearest.v);
+            _mm512_store_si512(index, nearest.primitive);
+            for (int j = 0; j < 16; ++j) {
+                if (!((group >> j) & 1u)) continue;
+                if ((untrusted >> j) & 1u) {
+                    ++untrusted_rays;
+                    continue;
+                }
+                Hits own;
+                unsigned lanes = isin::detail::test_block<culls>(b, rays[std::size_t(j)], t_max[j], own);
+                for (int k = 0; k < 8; ++k)
+                    if (skipping && skip[b.primitive[k]] && ((lanes >> k) & 1u)) lanes &= ~(1u << k), ++skipped;
+                CHECK(((hit >> j) & 1u) == (lanes != 0));
+                if (!lanes || !((hit >> j) & 1u)) continue;
+                const int k = isin::detail::nearest_lane(lanes, own, b);
+                CHECK((same_bits(t[j], own.t[k]) && same_bits(u[j], own.u[k]) && same_bits(v[j], own.v[k]) &&
+                       index[j] == b.primitive[k]));
+                ++hit_rays;
+            }
+            ++compared;
+        };
+        check(std::false_type{});
+        check(std::true_type{});
+    }
+    MESSAGE(compared, " blocks compared, ", hit_rays, " rays hit, ", untrusted_rays, " rays not trusted, ", skipped,
+            " hits skipped");
+    CHECK(hit_rays > 5000); // not vacuous: many rays hit, some are not trusted, some hits skipped
+    CHECK(untrusted_rays > 100);
+    CHECK(skipped > 100);
+#else
+    MESSAGE("rays in lanes need AVX-512 F+DQ: not compiled here");
+#endif
+}
+
 TEST_CASE("Bvh packets: the shears of 16 rays at once are each ray's own, bit for bit") {
 #if defined(ISIN_DETAIL_PACKETS)
     std::mt19937_64 rng(12);

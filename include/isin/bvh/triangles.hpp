@@ -38,6 +38,13 @@ template <class T>
 [[nodiscard]] inline bool is_padding(const TriangleBlock<T>& b, int k) noexcept {
     return k > 0 && b.primitive[k] == b.primitive[0];
 }
+/// The lanes of a block before its padding: its triangles.
+template <class T>
+[[nodiscard]] inline int live_lanes(const TriangleBlock<T>& b) noexcept {
+    int k = 1;
+    while (k < 8 && !is_padding(b, k)) ++k;
+    return k;
+}
 
 /// The triangle leaves' per-ray state: the origin and the watertight shear, set up when the ray
 /// reaches its first leaf (most rays of a frame that miss never do).

@@ -134,6 +134,51 @@ inline __m512 kahan_difference_of_products16(__m512 a, __m512 b, __m512 c, __m51
     return _mm512_sub_ps(_mm512_fmsub_ps(a, b, cd), error);
 }
 
+// Sixteen lanes of a ray and a triangle each: test_block_avx2's operations on them. The
+// triangle's vertices v[vertex][0, 1, 2] along the ray's kx, ky, kz.
+struct Sheared16 {
+    __m512 z[3], U, V, W, det;
+    Sheared16(const __m512 (&v)[3][3], __m512 ox, __m512 oy, __m512 oz, __m512 Sx, __m512 Sy) noexcept {
+        __m512 x[3], y[3]; // as Sheared8
+        for (int i = 0; i < 3; ++i) {
+            z[i] = _mm512_sub_ps(v[i][2], oz);
+            x[i] = _mm512_fnmadd_ps(Sx, z[i], _mm512_sub_ps(v[i][0], ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+            y[i] = _mm512_fnmadd_ps(Sy, z[i], _mm512_sub_ps(v[i][1], oy));
+        }
+        U = kahan_difference_of_products16(x[2], y[1], y[2], x[1]); // WBW: U = Cx·By − Cy·Bx
+        V = kahan_difference_of_products16(x[0], y[2], y[0], x[2]); // WBW: V = Ax·Cy − Ay·Cx
+        W = kahan_difference_of_products16(x[1], y[0], y[1], x[0]); // WBW: W = Bx·Ay − By·Ax
+        det = _mm512_add_ps(_mm512_add_ps(U, V), W);
+    }
+    // test_block_avx2's trust: every edge function at least 2^-126 in magnitude, |det| < 2^126.
+    unsigned trusted() const noexcept {
+        const __m512 smallest = min16(min16(_mm512_abs_ps(U), _mm512_abs_ps(V)), _mm512_abs_ps(W));
+        return unsigned(_mm512_cmp_ps_mask(smallest, _mm512_set1_ps(0x1p-126f), _CMP_GE_OQ)) &
+               unsigned(_mm512_cmp_ps_mask(_mm512_abs_ps(det), _mm512_set1_ps(0x1p126f), _CMP_LT_OQ));
+    }
+    // finish8's first part: the lanes inside (clockwise, §2, or either way unless culling), det ≠ 0.
+    template <bool cull>
+    unsigned inside() const noexcept {
+        const __m512 zero = _mm512_setzero_ps();
+        unsigned ok = _mm512_cmp_ps_mask(min16(min16(U, V), W), zero, _CMP_GE_OQ);
+        if constexpr (!cull) ok |= _mm512_cmp_ps_mask(max16(max16(U, V), W), zero, _CMP_LE_OQ);
+        return ok & unsigned(_mm512_cmp_ps_mask(det, zero, _CMP_NEQ_OQ));
+    }
+    // finish8's second part: t (and 1/det, for u and v).
+    __m512 t(__m512 Sz, __m512& inv_det) const noexcept {
+        const __m512 t_scaled = _mm512_fmadd_ps(
+            W, _mm512_mul_ps(Sz, z[2]),
+            _mm512_fmadd_ps(V, _mm512_mul_ps(Sz, z[1]), _mm512_mul_ps(U, _mm512_mul_ps(Sz, z[0])))); // WBW: t·det
+        inv_det = _mm512_div_ps(_mm512_set1_ps(1.0f), det);
+        return _mm512_mul_ps(t_scaled, inv_det);
+    }
+    // The lanes with 0 < t < t_max.
+    static unsigned ahead(__m512 t, __m512 t_max) noexcept {
+        return unsigned(_mm512_cmp_ps_mask(t, _mm512_setzero_ps(), _CMP_GT_OQ)) &
+               unsigned(_mm512_cmp_ps_mask(t, t_max, _CMP_LT_OQ));
+    }
+};
+
 // Two rays' tests of one block at once, ray a in lanes 0-7 and ray b in lanes 8-15 of one
 // AVX-512 register (a packet's rays that enter a leaf together): lane by lane the operations of
 // test_block_avx2, so the same lanes hit with the same t, u, v, in half the instructions and
@@ -153,43 +198,80 @@ inline unsigned test_block_pair(const TriangleBlock<float>& b, const TriangleRay
     const auto both = [](float a, float c) {
         return _mm512_mask_blend_ps(0xff00, _mm512_set1_ps(a), _mm512_set1_ps(c));
     };
-    const __m512 ox = both(ra.org[sa.kx], rb.org[sa.kx]), oy = both(ra.org[sa.ky], rb.org[sa.ky]);
-    const __m512 oz = both(ra.org[sa.kz], rb.org[sa.kz]);
-    const __m512 Sx = both(sa.Sx, sb.Sx), Sy = both(sa.Sy, sb.Sy);
-    __m512 x[3], y[3], z[3]; // as Sheared8
-    for (int v = 0; v < 3; ++v) {
-        z[v] = _mm512_sub_ps(load8_twice(b.v[v][sa.kz]), oz);
-        x[v] = _mm512_fnmadd_ps(Sx, z[v], _mm512_sub_ps(load8_twice(b.v[v][sa.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
-        y[v] = _mm512_fnmadd_ps(Sy, z[v], _mm512_sub_ps(load8_twice(b.v[v][sa.ky]), oy));
-    }
-    const __m512 U = kahan_difference_of_products16(x[2], y[1], y[2], x[1]); // WBW: U = Cx·By − Cy·Bx
-    const __m512 V = kahan_difference_of_products16(x[0], y[2], y[0], x[2]); // WBW: V = Ax·Cy − Ay·Cx
-    const __m512 W = kahan_difference_of_products16(x[1], y[0], y[1], x[0]); // WBW: W = Bx·Ay − By·Ax
-    const __m512 zero = _mm512_setzero_ps();
-    const __m512 det = _mm512_add_ps(_mm512_add_ps(U, V), W);
-    // test_block_avx2's trust: every edge function at least 2^-126 in magnitude, |det| < 2^126.
-    const __m512 smallest = min16(min16(_mm512_abs_ps(U), _mm512_abs_ps(V)), _mm512_abs_ps(W));
-    const unsigned trusted = unsigned(_mm512_cmp_ps_mask(smallest, _mm512_set1_ps(0x1p-126f), _CMP_GE_OQ)) &
-                             unsigned(_mm512_cmp_ps_mask(_mm512_abs_ps(det), _mm512_set1_ps(0x1p126f), _CMP_LT_OQ));
-    if (trusted != 0xffff) return one_by_one();
-    // finish8, on 16 lanes
-    unsigned ok = _mm512_cmp_ps_mask(min16(min16(U, V), W), zero, _CMP_GE_OQ); // clockwise (§2)
-    if constexpr (!cull) ok |= _mm512_cmp_ps_mask(max16(max16(U, V), W), zero, _CMP_LE_OQ);
-    ok &= _mm512_cmp_ps_mask(det, zero, _CMP_NEQ_OQ);
+    __m512 v[3][3];
+    for (int i = 0; i < 3; ++i)
+        v[i][0] = load8_twice(b.v[i][sa.kx]), v[i][1] = load8_twice(b.v[i][sa.ky]),
+        v[i][2] = load8_twice(b.v[i][sa.kz]);
+    const Sheared16 e(v, both(ra.org[sa.kx], rb.org[sa.kx]), both(ra.org[sa.ky], rb.org[sa.ky]),
+                      both(ra.org[sa.kz], rb.org[sa.kz]), both(sa.Sx, sb.Sx), both(sa.Sy, sb.Sy));
+    if (e.trusted() != 0xffff) return one_by_one();
+    unsigned ok = e.inside<cull>();
     if (!ok) return 0;
-    const __m512 S = both(sa.Sz, sb.Sz);
-    const __m512 t_scaled = _mm512_fmadd_ps(
-        W, _mm512_mul_ps(S, z[2]),
-        _mm512_fmadd_ps(V, _mm512_mul_ps(S, z[1]), _mm512_mul_ps(U, _mm512_mul_ps(S, z[0])))); // WBW: t·det
-    const __m512 inv_det = _mm512_div_ps(_mm512_set1_ps(1.0f), det);
-    const __m512 t = _mm512_mul_ps(t_scaled, inv_det);
-    ok &= unsigned(_mm512_cmp_ps_mask(t, zero, _CMP_GT_OQ)) &
-          unsigned(_mm512_cmp_ps_mask(t, both(t_max_a, t_max_b), _CMP_LT_OQ));
+    __m512 inv_det;
+    const __m512 t = e.t(both(sa.Sz, sb.Sz), inv_det);
+    ok &= Sheared16::ahead(t, both(t_max_a, t_max_b));
     if (store && ok) {
-        store_halves(t, out_a.t, out_b.t), store_halves(_mm512_mul_ps(V, inv_det), out_a.u, out_b.u);
-        store_halves(_mm512_mul_ps(W, inv_det), out_a.v, out_b.v);
+        store_halves(t, out_a.t, out_b.t), store_halves(_mm512_mul_ps(e.V, inv_det), out_a.u, out_b.u);
+        store_halves(_mm512_mul_ps(e.W, inv_det), out_a.v, out_b.v);
     }
     return ok;
+}
+
+/// Up to 16 rays in lanes whose shears permute the axes alike (kx, ky, kz): their origins and
+/// shears along those axes, and their bounds.
+struct ShearedRays {
+    __m512 ox, oy, oz, Sx, Sy, Sz, t_max;
+    int kx, ky, kz;
+};
+/// The nearest hit of each lane's ray in a block: t (∞ for none), u, v and the triangle's index.
+struct BlockHitLanes {
+    __m512 t, u, v;
+    __m512i primitive;
+};
+
+// The rays `rays` (lanes of r) against the block's triangles one by one, each triangle's
+// coordinates broadcast over the rays: lane by lane the operations of test_block_avx2, so the
+// same triangles hit with the same t, u, v; many rays entering a leaf together (a packet's) cost
+// one test a triangle instead of one a ray. Triangles the skip mask names hit nothing. A ray
+// for which test_block_avx2 would not trust some triangle of the block (it then tests the whole
+// block exactly) goes into `untrusted`, and its lane is left out of the result. Returns the
+// rays that hit a triangle with 0 < t < t_max; with `nearest`, `out` gets each one's nearest
+// (the least t, of equal t the lowest index: nearest_lane's choice).
+template <bool cull, bool nearest>
+inline unsigned test_block_rays(const TriangleBlock<float>& b, const ShearedRays& r, unsigned rays,
+                                const std::uint8_t* skip, BlockHitLanes& out, unsigned& untrusted) noexcept {
+    if constexpr (nearest) {
+        out.t = _mm512_set1_ps(std::numeric_limits<float>::infinity());
+        out.u = out.v = _mm512_setzero_ps();
+        out.primitive = _mm512_setzero_si512();
+    }
+    unsigned hit = 0;
+    for (int k = 0, n = live_lanes(b); k < n; ++k) {
+        __m512 v[3][3];
+        for (int i = 0; i < 3; ++i)
+            v[i][0] = _mm512_set1_ps(b.v[i][r.kx][k]), v[i][1] = _mm512_set1_ps(b.v[i][r.ky][k]),
+            v[i][2] = _mm512_set1_ps(b.v[i][r.kz][k]);
+        const Sheared16 e(v, r.ox, r.oy, r.oz, r.Sx, r.Sy);
+        untrusted |= rays & ~e.trusted();
+        if (skip && skip[b.primitive[k]]) continue; // after its trust, which counts as there
+        unsigned ok = rays & e.inside<cull>();
+        if (!ok) continue;
+        __m512 inv_det;
+        const __m512 t = e.t(r.Sz, inv_det);
+        ok &= Sheared16::ahead(t, r.t_max);
+        hit |= ok;
+        if constexpr (nearest) {
+            const __m512i index = _mm512_set1_epi32(int(b.primitive[k]));
+            const __mmask16 nearer = __mmask16(ok & (unsigned(_mm512_cmp_ps_mask(t, out.t, _CMP_LT_OQ)) |
+                                                     (unsigned(_mm512_cmp_ps_mask(t, out.t, _CMP_EQ_OQ)) &
+                                                      unsigned(_mm512_cmplt_epu32_mask(index, out.primitive)))));
+            out.t = _mm512_mask_mov_ps(out.t, nearer, t);
+            out.u = _mm512_mask_mul_ps(out.u, nearer, e.V, inv_det);
+            out.v = _mm512_mask_mul_ps(out.v, nearer, e.W, inv_det);
+            out.primitive = _mm512_mask_mov_epi32(out.primitive, nearer, index);
+        }
+    }
+    return hit & ~untrusted;
 }
 #endif
 
@@ -197,8 +279,8 @@ inline unsigned test_block_pair(const TriangleBlock<float>& b, const TriangleRay
 /// computes: the axes in k[0..2] (kx, ky, kz), Sx, Sy, Sz in S[0..2], and in `usable` the lanes
 /// whose set() would succeed (d[kz] != 0: true for NaN, as there).
 struct ShearLanes {
-    alignas(32) float S[3][16];
-    alignas(32) std::int32_t k[3][16];
+    alignas(64) float S[3][16];
+    alignas(64) std::int32_t k[3][16];
     unsigned usable = 0;
     WatertightShear<float> at(int lane) const noexcept {
         WatertightShear<float> s;
