@@ -134,17 +134,20 @@ inline __m512 kahan_difference_of_products16(__m512 a, __m512 b, __m512 c, __m51
     return _mm512_sub_ps(_mm512_fmsub_ps(a, b, cd), error);
 }
 
-// Sixteen lanes of a ray and a triangle each: test_block_avx2's operations on them. The
-// triangle's vertices v[vertex][0, 1, 2] along the ray's kx, ky, kz.
+// Sixteen lanes of a ray and a triangle each: test_block_avx2's operations on them.
+// `vertex(i, a)` gives the triangles' vertex i along the rays' axis a (0, 1, 2: kx, ky, kz).
+// Written out vertex by vertex: as loops, g++ -O2 kept the coordinates in memory.
 struct Sheared16 {
     __m512 z[3], U, V, W, det;
-    Sheared16(const __m512 (&v)[3][3], __m512 ox, __m512 oy, __m512 oz, __m512 Sx, __m512 Sy) noexcept {
+    template <class Vertex>
+    Sheared16(const Vertex& vertex, __m512 ox, __m512 oy, __m512 oz, __m512 Sx, __m512 Sy) noexcept {
         __m512 x[3], y[3]; // as Sheared8
-        for (int i = 0; i < 3; ++i) {
-            z[i] = _mm512_sub_ps(v[i][2], oz);
-            x[i] = _mm512_fnmadd_ps(Sx, z[i], _mm512_sub_ps(v[i][0], ox)); // WBW: Ax = A[kx] − Sx·A[kz]
-            y[i] = _mm512_fnmadd_ps(Sy, z[i], _mm512_sub_ps(v[i][1], oy));
-        }
+        const auto shear = [&](int i) {
+            z[i] = _mm512_sub_ps(vertex(i, 2), oz);
+            x[i] = _mm512_fnmadd_ps(Sx, z[i], _mm512_sub_ps(vertex(i, 0), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+            y[i] = _mm512_fnmadd_ps(Sy, z[i], _mm512_sub_ps(vertex(i, 1), oy));
+        };
+        shear(0), shear(1), shear(2);
         U = kahan_difference_of_products16(x[2], y[1], y[2], x[1]); // WBW: U = Cx·By − Cy·Bx
         V = kahan_difference_of_products16(x[0], y[2], y[0], x[2]); // WBW: V = Ax·Cy − Ay·Cx
         W = kahan_difference_of_products16(x[1], y[0], y[1], x[0]); // WBW: W = Bx·Ay − By·Ax
@@ -198,12 +201,10 @@ inline unsigned test_block_pair(const TriangleBlock<float>& b, const TriangleRay
     const auto both = [](float a, float c) {
         return _mm512_mask_blend_ps(0xff00, _mm512_set1_ps(a), _mm512_set1_ps(c));
     };
-    __m512 v[3][3];
-    for (int i = 0; i < 3; ++i)
-        v[i][0] = load8_twice(b.v[i][sa.kx]), v[i][1] = load8_twice(b.v[i][sa.ky]),
-        v[i][2] = load8_twice(b.v[i][sa.kz]);
-    const Sheared16 e(v, both(ra.org[sa.kx], rb.org[sa.kx]), both(ra.org[sa.ky], rb.org[sa.ky]),
-                      both(ra.org[sa.kz], rb.org[sa.kz]), both(sa.Sx, sb.Sx), both(sa.Sy, sb.Sy));
+    const int axis[3] = {sa.kx, sa.ky, sa.kz};
+    const Sheared16 e([&](int i, int a) { return load8_twice(b.v[i][axis[a]]); }, both(ra.org[sa.kx], rb.org[sa.kx]),
+                      both(ra.org[sa.ky], rb.org[sa.ky]), both(ra.org[sa.kz], rb.org[sa.kz]), both(sa.Sx, sb.Sx),
+                      both(sa.Sy, sb.Sy));
     if (e.trusted() != 0xffff) return one_by_one();
     unsigned ok = e.inside<cull>();
     if (!ok) return 0;
@@ -246,13 +247,12 @@ inline unsigned test_block_rays(const TriangleBlock<float>& b, const ShearedRays
         out.primitive = _mm512_setzero_si512();
     }
     unsigned hit = 0;
+    const int axis[3] = {r.kx, r.ky, r.kz};
+    unsigned doubtful = 0;
     for (int k = 0, n = live_lanes(b); k < n; ++k) {
-        __m512 v[3][3];
-        for (int i = 0; i < 3; ++i)
-            v[i][0] = _mm512_set1_ps(b.v[i][r.kx][k]), v[i][1] = _mm512_set1_ps(b.v[i][r.ky][k]),
-            v[i][2] = _mm512_set1_ps(b.v[i][r.kz][k]);
-        const Sheared16 e(v, r.ox, r.oy, r.oz, r.Sx, r.Sy);
-        untrusted |= rays & ~e.trusted();
+        const Sheared16 e([&](int i, int a) { return _mm512_set1_ps(b.v[i][axis[a]][k]); }, r.ox, r.oy, r.oz, r.Sx,
+                          r.Sy);
+        doubtful |= rays & ~e.trusted();
         if (skip && skip[b.primitive[k]]) continue; // after its trust, which counts as there
         unsigned ok = rays & e.inside<cull>();
         if (!ok) continue;
@@ -271,7 +271,8 @@ inline unsigned test_block_rays(const TriangleBlock<float>& b, const ShearedRays
             out.primitive = _mm512_mask_mov_epi32(out.primitive, nearer, index);
         }
     }
-    return hit & ~untrusted;
+    untrusted |= doubtful;
+    return hit & ~doubtful;
 }
 #endif
 
