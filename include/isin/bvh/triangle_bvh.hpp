@@ -383,10 +383,12 @@ private:
 #if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
     // A packet's leaf with the rays in lanes, triangle by triangle (test_block_rays), a group of
     // rays whose shears permute the axes alike at a time (most packets are one group). A group
-    // with fewer rays than the block has triangles is left to the rays one by one (two per
-    // register, where a ray costs about half a triangle's test): measured, primary and shadow rays
-    // on the 82k icosphere 1.14× and 1.18× as fast as pairs for every group, the others within
-    // noise; all groups in lanes lost on the 1.3M icosphere and the soup (0.85-0.94×, 0.76×).
+    // with fewer rays than half the block's triangles is left to the rays one by one (two per
+    // register). Measured against two rays per register for every group (same process, -O3
+    // -march=native, medians of 9, two runs; primary / shadow rays): 82k icosphere 1.24 / 1.35,
+    // trefoil 1.11 / 1.12, terrain 1.08-1.17 / 1.18-1.19, 1.3M icosphere 0.97-1.21 / 1.04-1.07, soup
+    // 1.18-1.22 / 0.97-1.00. Every group in lanes: the same within noise, but soup shadows 0.85;
+    // groups of at least as many rays as triangles: the same but 1.3M primary 0.86-1.06.
     // Nearest hits go into `best` and lower t_far; occluded rays into `done`. Returns the rays left
     // for one by one: those groups, the rays some triangle's test is not trusted for, and the
     // rays without a shear.
@@ -404,7 +406,7 @@ private:
             const unsigned group = rest & _mm512_cmpeq_epi32_mask(kx, _mm512_set1_epi32(r.kx)) &
                                    _mm512_cmpeq_epi32_mask(kz, _mm512_set1_epi32(r.kz));
             rest &= ~group;
-            if (detail::bit_count(group) < triangles) {
+            if (2 * detail::bit_count(group) < triangles) {
                 one_by_one |= group;
                 continue;
             }
