@@ -387,8 +387,9 @@ private:
     // register). Measured against two rays per register for every group (same process, -O3
     // -march=native, medians of 9, two runs; primary / shadow rays): 82k icosphere 1.24-1.26 /
     // 1.35-1.47, trefoil 1.11-1.15 / 1.05-1.12, terrain 1.08-1.17 / 1.18-1.19, 1.3M icosphere
-    // 0.97-1.21 / 1.04-1.07, soup 1.18-1.22 / 0.97-1.00. Every group in lanes: the same within noise, but soup shadows 0.85;
-    // groups of at least as many rays as triangles: the same but 1.3M primary 0.86-1.06.
+    // 0.97-1.21 / 1.04-1.07, soup 1.18-1.22 / 0.97-1.00. Every group in lanes: the same within
+    // noise, but soup shadows 0.85; groups of at least as many rays as triangles: the same but 1.3M
+    // primary 0.86-1.06.
     // Nearest hits go into `best` and lower t_far; occluded rays into `done`. Returns the rays left
     // for one by one: those groups, the rays some triangle's test is not trusted for, and the
     // rays without a shear.
