@@ -106,7 +106,8 @@ inline unsigned hit_children(const typename BvhTree<T>::Node& n, const SlabRay<T
 #if defined(ISIN_DETAIL_SLABS_AVX)
     if constexpr (sizeof(T) == sizeof(float)) { // 8 boxes in one 256-bit register per plane
         __m256 t0[3], t1[3];                    // entry and exit distances of each axis' slab
-        for (int a = 0; a < 3; ++a) {
+        // Axis by axis, written out: as a loop, g++ -O2 kept t0 and t1 on the stack.
+        const auto slab = [&](int a) {
             const __m256 near_plane = _mm256_load_ps(plane<T>(n, r.near_plane[a]));
             const __m256 far_plane = _mm256_load_ps(plane<T>(n, r.far_plane[a]));
 #if defined(__FMA__)
@@ -117,13 +118,14 @@ inline unsigned hit_children(const typename BvhTree<T>::Node& n, const SlabRay<T
                                         _mm256_set1_ps(float(r.org_inv_near[a])));
                 t1[a] = _mm256_fmsub_ps(far_plane, _mm256_set1_ps(float(r.inv_far[a])),
                                         _mm256_set1_ps(float(r.org_inv_far[a])));
-                continue;
+                return;
             }
 #endif
             const __m256 org = _mm256_set1_ps(float(r.org[a]));
             t0[a] = _mm256_mul_ps(_mm256_sub_ps(near_plane, org), _mm256_set1_ps(float(r.inv[a])));
             t1[a] = _mm256_mul_ps(_mm256_sub_ps(far_plane, org), _mm256_set1_ps(float(r.inv_far[a])));
-        }
+        };
+        slab(0), slab(1), slab(2);
         __m256 tn, tf;
         if constexpr (robust) { // _mm256_max_ps(a, b) is b when either is NaN
             tn = _mm256_max_ps(t0[2], _mm256_max_ps(t0[1], _mm256_max_ps(t0[0], _mm256_setzero_ps())));
