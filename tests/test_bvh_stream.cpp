@@ -27,6 +27,29 @@ bool same_hit(const isin::Hit<T>& a, const isin::Hit<T>& b) {
     return same_bits(a.t, b.t) && same_bits(a.u, b.u) && same_bits(a.v, b.v) && a.primitive == b.primitive;
 }
 
+#if defined(ISIN_DETAIL_TRIANGLE_PAIRS) // the helpers of the AVX-512 leaf tests' tests
+/// A leaf block of `live` random triangles in front of the origin (z around 3·scale), each
+/// coordinate `scale`·U(−1, 1); the rest padding (lane 0 again), indices 7k + 3.
+template <class Rng>
+isin::detail::TriangleBlock<float> random_block(Rng& rng, float scale, int live) {
+    std::uniform_real_distribution<float> uni(-1, 1);
+    isin::detail::TriangleBlock<float> b;
+    for (int k = 0; k < 8; ++k) {
+        for (int v = 0; v < 3; ++v)
+            for (int a = 0; a < 3; ++a)
+                b.v[v][a][k] = k < live ? scale * (uni(rng) + (a == 2 ? 3.0f : 0.0f)) : b.v[v][a][0];
+        b.primitive[k] = k < live ? std::uint32_t(7 * k + 3) : b.primitive[0];
+    }
+    return b;
+}
+
+/// The centroid of the block's triangle k.
+isin::Vertex<float> centroid(const isin::detail::TriangleBlock<float>& b, int k) {
+    return {(b.v[0][0][k] + b.v[1][0][k] + b.v[2][0][k]) / 3, (b.v[0][1][k] + b.v[1][1][k] + b.v[2][1][k]) / 3,
+            (b.v[0][2][k] + b.v[1][2][k] + b.v[2][2][k]) / 3};
+}
+#endif
+
 /// Counts the rays whose stream results differ from the single-ray calls' (nearest hit, and
 /// occlusion up to `limit`), through the array and the structure-of-arrays forms.
 template <class T>
@@ -266,17 +289,10 @@ TEST_CASE("Bvh packets: two rays' block test in one register gives each ray's ow
     int compared = 0, hit_lanes = 0, differing_axes = 0;
     for (int i = 0; i < 4000; ++i) {
         const float s = scales[i % 5];
-        Block b;
-        for (int k = 0; k < 8; ++k) {
-            for (int v = 0; v < 3; ++v)
-                for (int a = 0; a < 3; ++a) b.v[v][a][k] = s * (uni(rng) + (a == 2 ? 3.0f : 0.0f));
-            b.primitive[k] = std::uint32_t(k);
-        }
+        const Block b = random_block(rng, s, 8);
         // Ray a towards a lane's centroid; ray b near it (a packet's neighbour) or anywhere.
         const int aim = int(rng() % 8);
-        const isin::Vertex<float> c{(b.v[0][0][aim] + b.v[1][0][aim] + b.v[2][0][aim]) / 3,
-                                    (b.v[0][1][aim] + b.v[1][1][aim] + b.v[2][1][aim]) / 3,
-                                    (b.v[0][2][aim] + b.v[1][2][aim] + b.v[2][2][aim]) / 3};
+        const isin::Vertex<float> c = centroid(b, aim);
         const isin::Vertex<float> o{s * 0.1f * uni(rng), s * 0.1f * uni(rng), s * 0.1f * uni(rng)};
         const isin::Vertex<float> jitter{0.02f * uni(rng), 0.02f * uni(rng), 0.02f * uni(rng)};
         const isin::Vertex<float> d = c - o, d2 = i % 7 == 0 ? isin::Vertex<float>{uni(rng), uni(rng), uni(rng)}
@@ -330,13 +346,7 @@ TEST_CASE("Bvh packets: a block's test with the rays in lanes gives each ray's o
     for (int i = 0; i < 2000; ++i) {
         const float s = scales[i % 5];
         const int live = 1 + int(rng() % 8); // the rest is padding: lane 0 again
-        Block b;
-        for (int k = 0; k < 8; ++k) {
-            for (int v = 0; v < 3; ++v)
-                for (int a = 0; a < 3; ++a)
-                    b.v[v][a][k] = k < live ? s * (uni(rng) + (a == 2 ? 3.0f : 0.0f)) : b.v[v][a][0];
-            b.primitive[k] = k < live ? std::uint32_t(7 * k + 3) : b.primitive[0];
-        }
+        Block b = random_block(rng, s, live);
         // Two triangles at the same place (ties in t: the lower index wins), now and then.
         if (live > 2 && i % 6 == 0)
             for (int v = 0; v < 3; ++v)
@@ -348,9 +358,7 @@ TEST_CASE("Bvh packets: a block's test with the rays in lanes gives each ray's o
         // 16 rays towards a lane's centroid from one origin or spread ones, one of them from a
         // vertex (edge functions of zero: not trusted); their shears may permute the axes apart.
         const int aim = int(rng() % std::uint64_t(live));
-        const isin::Vertex<float> c{(b.v[0][0][aim] + b.v[1][0][aim] + b.v[2][0][aim]) / 3,
-                                    (b.v[0][1][aim] + b.v[1][1][aim] + b.v[2][1][aim]) / 3,
-                                    (b.v[0][2][aim] + b.v[1][2][aim] + b.v[2][2][aim]) / 3};
+        const isin::Vertex<float> c = centroid(b, aim);
         const isin::Vertex<float> o{s * 0.1f * uni(rng), s * 0.1f * uni(rng), s * 0.1f * uni(rng)};
         std::vector<Ray> rays;
         float t_max[16];

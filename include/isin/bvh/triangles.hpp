@@ -81,8 +81,7 @@ template <bool cull, class T>
                                                 LaneHits<T>& out) noexcept {
     unsigned lanes = 0;
     const Vertex<T> o{r.org[0], r.org[1], r.org[2]};
-    for (int k = 0; k < 8; ++k) {
-        if (is_padding(b, k)) break;
+    for (int k = 0, n = live_lanes(b); k < n; ++k) {
         Vertex<T> p[3]; // the vertices relative to the origin
         for (int v = 0; v < 3; ++v) p[v] = Vertex<T>{b.v[v][0][k], b.v[v][1][k], b.v[v][2][k]} - o;
         const Hit<T> h = intersect_sheared(p[0], p[1], p[2], r.shear, cull);
