@@ -6,7 +6,9 @@
 #include "approx.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <vector>
 #include <stdexcept>
 #include <utility>
 
@@ -49,6 +51,46 @@ TEST_CASE_TEMPLATE("§3 primary ray: Ro = eye, Rd = normalize(GD − eye)", T, f
     CHECK(centre.direction.x == approx(0));
     CHECK(centre.direction.y == approx(0));
     CHECK(centre.direction.z == approx(1));
+}
+
+TEST_CASE_TEMPLATE("§3 primary_rays: many rays at once are primary_ray's, bit for bit, whatever their lane", T, float,
+                   double) {
+    // A posed camera (so every component of right, up and forward counts), 37 points: a whole
+    // register of lanes or more, then a partial one; sub-pixel positions, the corners, one far
+    // outside the image and one NaN, which primary_ray turns into a zero direction.
+    const isin::Camera<T> cam{640, 360, {3, -1, 2}, T(0.4), T(-0.2), T(0.1)};
+    std::vector<T> x, y;
+    for (int k = 0; k < 35; ++k) x.push_back(T(k * 17 % 640) + T(k % 4) / T(4)), y.push_back(T(k * 29 % 360) + T(0.5));
+    x.push_back(std::numeric_limits<T>::max() / 2), y.push_back(T(2));
+    x.push_back(std::numeric_limits<T>::quiet_NaN()), y.push_back(T(3));
+    x[0] = T(0), y[0] = T(0), x[1] = T(639), y[1] = T(359);
+    std::vector<isin::Ray<T>> rays(x.size());
+    for (std::size_t n : {std::size_t(0), std::size_t(1), x.size()}) {
+        for (auto& r : rays) r = {{T(-7), T(-7), T(-7)}, {T(-7), T(-7), T(-7)}};
+        cam.primary_rays(x.data(), y.data(), n, rays.data());
+        int same = 0;
+        for (std::size_t k = 0; k < n; ++k) {
+            const isin::Ray<T> one = cam.primary_ray(x[k], y[k]);
+            same += std::memcmp(&one, &rays[k], sizeof one) == 0;
+        }
+        CHECK(same == int(n));
+        for (std::size_t k = n; k < rays.size(); ++k) CHECK(rays[k].origin.x == T(-7)); // nothing beyond n
+    }
+    CHECK(rays[35].direction == isin::Vertex<T>{0, 0, 0}); // GD not finite: no direction
+    CHECK(rays[36].direction == isin::Vertex<T>{0, 0, 0});
+    // Shifting the points by one lane changes no ray: each lane is computed alone.
+    std::vector<isin::Ray<T>> shifted(x.size() + 1);
+    std::vector<T> xs{T(5)}, ys{T(6)};
+    xs.insert(xs.end(), x.begin(), x.end()), ys.insert(ys.end(), y.begin(), y.end());
+    cam.primary_rays(xs.data(), ys.data(), xs.size(), shifted.data());
+    CHECK(std::memcmp(shifted.data() + 1, rays.data(), rays.size() * sizeof rays[0]) == 0);
+    // The directions are GD − eye normalised (the image points agree with the rays).
+    for (std::size_t k = 0; k < 35; ++k) {
+        const isin::Vertex<T> d = isin::normalize(cam.image_point(x[k], y[k]) - cam.position());
+        CHECK(rays[k].direction.x == approx(d.x));
+        CHECK(rays[k].direction.y == approx(d.y));
+        CHECK(rays[k].direction.z == approx(d.z));
+    }
 }
 
 TEST_CASE_TEMPLATE("§3 a posed camera moves and turns the whole rig (left-handed, +Y up)", T, float, double) {

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <random>
 #include <stdexcept>
 #include <utility>
@@ -567,4 +568,67 @@ TEST_CASE_TEMPLATE("render: blocks of 8×8 pixels through the stream calls give 
     CHECK(render_is_trace_per_pixel(opaque, cam, opt));
     opt.shadows = false;
     CHECK(render_is_trace_per_pixel(opaque, cam, opt));
+}
+
+TEST_CASE_TEMPLATE("§7 the lights' terms in lanes: phong_light's value for each point, the same bits in any lane", T,
+                   float, double) {
+    using Lanes = isin::detail::LightLanes<T>;
+    constexpr std::size_t W = Lanes::width, N = 64;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<T> coord(T(-50), T(50)), unit(T(0), T(1));
+    const auto direction = [&] { return isin::normalize(isin::Vertex<T>{coord(rng), coord(rng), coord(rng)}); };
+    std::vector<isin::Material<T>> materials(N);
+    std::vector<isin::detail::Shading<T>> points(N);
+    for (std::size_t i = 0; i < N; ++i) {
+        isin::Material<T>& m = materials[i];
+        m.kd = unit(rng), m.ks = unit(rng), m.shininess = T(1) + T(120) * unit(rng);
+        m.specular_color = {unit(rng), unit(rng), unit(rng)};
+        isin::detail::Shading<T>& s = points[i];
+        s.m = &m;
+        s.sp.point = {coord(rng), coord(rng), coord(rng)};
+        s.Ns = direction(), s.V = direction();
+        if (i % 5 == 0)
+            s.V = isin::reflect(-isin::normalize(isin::Vertex<T>{0, 60, 0} - s.sp.point), s.Ns); // highlight
+        s.object = {unit(rng), unit(rng), unit(rng)};
+        s.local = {unit(rng), unit(rng), unit(rng)};
+    }
+    points[3].sp.point = {0, 60, 0}; // at the light: no direction, unlit
+    const isin::PointLight<T> light{{0, 60, 0}, {T(0.9), T(0.8), T(0.7)}};
+    // All 64 points in one set of lanes, light visible in part.
+    alignas(64) T lanes[Lanes::rows * N];
+    for (std::size_t i = 0; i < N; ++i) Lanes::set(lanes, N, i, points[i]);
+    for (std::size_t k = 0; k < N; k += W) isin::detail::light_direction_pass(lanes + k, N, 0, light.position);
+    T* visible = lanes + Lanes::field(0, Lanes::visible) * N;
+    for (std::size_t i = 0; i < N; ++i) visible[i] = i % 7 == 0 ? T(0) : i % 3 == 0 ? T(0.5) : T(1);
+    for (std::size_t k = 0; k < N; k += W) isin::detail::light_term_pass(lanes + k, N, 0, light.color);
+    int lit = 0, highlights = 0, same_bits = 0;
+    for (std::size_t i = 0; i < N; ++i) {
+        const isin::detail::Shading<T>& s = points[i];
+        // The scalar formulas (shading.hpp).
+        const isin::Vertex<T> L = isin::normalize(light.position - s.sp.point);
+        const T n_dot_l = isin::dot(s.Ns, L);
+        isin::Color<T> expected = s.local;
+        if (n_dot_l > T(0) && visible[i] > T(0))
+            expected += visible[i] * isin::phong_light(*s.m, s.object, s.Ns, L, s.V, light.color), ++lit;
+        if (n_dot_l > T(0) && isin::specular_coefficient(s.Ns, L, s.V, s.m->shininess) > T(0.5)) ++highlights;
+        const isin::Color<T> got = Lanes::local(lanes, N, i);
+        const T tolerance = sizeof(T) == 4 ? T(2e-5) : T(1e-13); // pow's exponent up to 121 magnifies rounding
+        CHECK(std::fabs(got.r - expected.r) <= tolerance);
+        CHECK(std::fabs(got.g - expected.g) <= tolerance);
+        CHECK(std::fabs(got.b - expected.b) <= tolerance);
+        // The same point alone in lane 0 of one register, as trace() computes it: the same bits.
+        alignas(64) T one[Lanes::rows * W];
+        for (std::size_t k = 0; k < W; ++k) Lanes::clear(one, W, k);
+        Lanes::set(one, W, 0, s);
+        isin::detail::light_direction_pass(one, W, 0, light.position);
+        one[Lanes::field(0, Lanes::visible) * W] = visible[i];
+        isin::detail::light_term_pass(one, W, 0, light.color);
+        const isin::Color<T> alone = Lanes::local(one, W, 0);
+        same_bits += std::memcmp(&alone, &got, sizeof got) == 0;
+    }
+    CHECK(same_bits == int(N));
+    CHECK(lit > 10); // the test saw lit points, highlights and unlit ones
+    CHECK(lit < int(N) - 10);
+    CHECK(highlights > 3);
+    CHECK(Lanes::local(lanes, N, 3) == points[3].local);
 }

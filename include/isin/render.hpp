@@ -141,20 +141,132 @@ Shading<T> begin_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const H
     return s;
 }
 
-// Whether `light` can light the shaded point (§7: not when the surface faces away); if so its
-// direction L and the shadow ray towards it (§9: anything with t in (0, 1) is in the way).
+// The lights' Phong terms (§7) of shaded points, lane by lane. Lane k of field f is at
+// lanes[f·stride + k]: each point's position, shading normal, direction to the eye, material and
+// colour so far, and for each of up to `slots` lights at a time its direction L, N·L and the
+// fraction of it that gets through (what the shadow rays found). The passes take one register of
+// lanes (lane_pack.hpp; one lane where the target has none) and are compiled once: trace() (one
+// point) and the renderer's streams (up to stream_rays points) run the same instructions on each
+// lane, so a point gets the same colour bit for bit whatever its lane.
 template <class T>
-bool lit_by(const Shading<T>& s, const PointLight<T>& light, Vertex<T>& L, Ray<T>& shadow) noexcept {
-    L = normalize(light.position - s.sp.point);
-    if (!(dot(s.Ns, L) > T(0))) return false;
-    shadow = {s.shadow_from, light.position - s.shadow_from};
-    return true;
+struct LightLanes : LaneRegister<T> {
+    enum Field : std::size_t {
+        px,
+        py,
+        pz,
+        nx,
+        ny,
+        nz,
+        vx,
+        vy,
+        vz,
+        kd,
+        ks,
+        shininess,
+        cr,
+        cg,
+        cb,
+        sr,
+        sg,
+        sb,
+        lr,
+        lg,
+        lb,
+        fields
+    };
+    enum PerLight : std::size_t { lx, ly, lz, n_dot_l, visible, per_light };
+    static constexpr std::size_t slots = 4; // lights at a time
+    static constexpr std::size_t rows = fields + slots * per_light;
+    // Field f of light slot `slot`.
+    static constexpr std::size_t field(std::size_t slot, PerLight f) noexcept { return fields + slot * per_light + f; }
+
+    // Lane k holds shaded point s: the point lit, the normal it is lit by, the eye's direction,
+    // the material's Phong weights, the surface colour (object), the highlight's, and the local
+    // colour so far (the ambient term, begin_shading).
+    static void set(T* lanes, std::size_t stride, std::size_t k, const Shading<T>& s) noexcept {
+        const T values[fields] = {s.sp.point.x,
+                                  s.sp.point.y,
+                                  s.sp.point.z,
+                                  s.Ns.x,
+                                  s.Ns.y,
+                                  s.Ns.z,
+                                  s.V.x,
+                                  s.V.y,
+                                  s.V.z,
+                                  s.m->kd,
+                                  s.m->ks,
+                                  s.m->shininess,
+                                  s.object.r,
+                                  s.object.g,
+                                  s.object.b,
+                                  s.m->specular_color.r,
+                                  s.m->specular_color.g,
+                                  s.m->specular_color.b,
+                                  s.local.r,
+                                  s.local.g,
+                                  s.local.b};
+        for (std::size_t f = 0; f < fields; ++f) lanes[f * stride + k] = values[f];
+    }
+    // Lane k holds nothing: zeros, which no light lights (N·L = 0).
+    static void clear(T* lanes, std::size_t stride, std::size_t k) noexcept {
+        for (std::size_t f = 0; f < rows; ++f) lanes[f * stride + k] = T(0);
+    }
+    // The local colour of lane k.
+    static Color<T> local(const T* lanes, std::size_t stride, std::size_t k) noexcept {
+        return {lanes[lr * stride + k], lanes[lg * stride + k], lanes[lb * stride + k]};
+    }
+};
+
+// §7 for the register of lanes at p: the unit direction L from each point to the light (as
+// normalize(): none, 0, where light − point has no length or is not finite) and N·L, into `slot`.
+template <class T>
+ISIN_DETAIL_NOINLINE void light_direction_pass(T* p, std::size_t stride, std::size_t slot,
+                                               const Vertex<T>& light) noexcept {
+    using Lanes = LightLanes<T>;
+    using V = typename Lanes::V;
+    const auto at = [&](std::size_t f) { return Lanes::load(p + f * stride); };
+    V x = V(light.x) - at(Lanes::px), y = V(light.y) - at(Lanes::py), z = V(light.z) - at(Lanes::pz);
+    lane_normalize<T>(x, y, z);
+    Lanes::store(x, p + Lanes::field(slot, Lanes::lx) * stride);
+    Lanes::store(y, p + Lanes::field(slot, Lanes::ly) * stride);
+    Lanes::store(z, p + Lanes::field(slot, Lanes::lz) * stride);
+    const V n_dot_l = at(Lanes::nx) * x + at(Lanes::ny) * y + at(Lanes::nz) * z; // §7: N·L
+    Lanes::store(n_dot_l, p + Lanes::field(slot, Lanes::n_dot_l) * stride);
 }
 
-// The light's Phong term (§7) weighed by what gets through to it.
+// §7 for the register of lanes at p: where N·L > 0 and some of the light in `slot` gets through,
+// the local colour gains visible·(kd·(N·L)·object + ks·specular_power(Rf·V)·highlight)·light, Rf
+// the mirror of −L about N (phong_light's terms, in its order).
 template <class T>
-void add_light(Shading<T>& s, const PointLight<T>& light, const Vertex<T>& L, T visible) noexcept {
-    if (visible > T(0)) s.local += visible * phong_light(*s.m, s.object, s.Ns, L, s.V, light.color);
+ISIN_DETAIL_NOINLINE void light_term_pass(T* p, std::size_t stride, std::size_t slot, const Color<T>& light) noexcept {
+    using Lanes = LightLanes<T>;
+    using V = typename Lanes::V;
+    constexpr std::size_t W = Lanes::width;
+    const auto at = [&](std::size_t f) { return Lanes::load(p + f * stride); };
+    const auto of_light = [&](typename Lanes::PerLight f) { return p + Lanes::field(slot, f) * stride; };
+    const V nx = at(Lanes::nx), ny = at(Lanes::ny), nz = at(Lanes::nz);
+    const V lx = Lanes::load(of_light(Lanes::lx)), ly = Lanes::load(of_light(Lanes::ly)),
+            lz = Lanes::load(of_light(Lanes::lz));
+    const V n_dot_l = Lanes::load(of_light(Lanes::n_dot_l)), visible = Lanes::load(of_light(Lanes::visible));
+    // §7: Rf = d − 2(d·N)N with d = −L, and its cosine with V
+    const V twice = T(2) * (-lx * nx + -ly * ny + -lz * nz);
+    const V rx = -lx - twice * nx, ry = -ly - twice * ny, rz = -lz - twice * nz;
+    alignas(64) T cosine[W], shine[W], spec[W];
+    Lanes::store(rx * at(Lanes::vx) + ry * at(Lanes::vy) + rz * at(Lanes::vz), cosine);
+    Lanes::store(at(Lanes::shininess), shine);
+    const T* lit = of_light(Lanes::n_dot_l);
+    const T* through = of_light(Lanes::visible);
+    for (std::size_t k = 0; k < W; ++k) // cos^shininess lane by lane (std::pow), where the term counts
+        spec[k] = lit[k] > T(0) && through[k] > T(0) ? specular_power(cosine[k], shine[k]) : T(0);
+    const auto counts = (n_dot_l > T(0)) & (visible > T(0));
+    const V diffuse = at(Lanes::kd) * n_dot_l, specular = at(Lanes::ks) * Lanes::load(spec);
+    const auto add = [&](std::size_t sum, std::size_t object, std::size_t highlight, T colour) {
+        const V term = visible * ((diffuse * at(object) + specular * at(highlight)) * V(colour));
+        Lanes::store(select(counts, at(sum) + term, at(sum)), p + sum * stride);
+    };
+    add(Lanes::lr, Lanes::cr, Lanes::sr, light.r);
+    add(Lanes::lg, Lanes::cg, Lanes::sg, light.g);
+    add(Lanes::lb, Lanes::cb, Lanes::sb, light.b);
 }
 
 template <class T, template <class> class... S>
@@ -172,17 +284,25 @@ template <class T, template <class> class... S>
     const Hit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
     if (!sh) return scene.background;
     detail::Shading<T> s = detail::begin_shading(scene, ray, sh);
+    // The lights one at a time, in lane 0 of one register (the renderer's streams fill them all).
+    using Lanes = detail::LightLanes<T>;
+    constexpr std::size_t W = Lanes::width;
+    alignas(64) T lanes[Lanes::rows * W];
+    for (std::size_t k = 0; k < W; ++k) Lanes::clear(lanes, W, k);
+    Lanes::set(lanes, W, 0, s);
+    const T& n_dot_l = lanes[Lanes::field(0, Lanes::n_dot_l) * W];
+    T& visible = lanes[Lanes::field(0, Lanes::visible) * W];
     for (const PointLight<T>& light : scene.lights) {
-        Vertex<T> L;
-        Ray<T> shadow;
-        if (!detail::lit_by(s, light, L, shadow)) continue; // §7: facing away → unlit, no shadow ray needed
-        T visible = T(1);
+        detail::light_direction_pass(lanes, W, 0, light.position);
+        if (!(n_dot_l > T(0))) continue; // §7: facing away → unlit, no shadow ray needed
+        visible = T(1);
         if (opt.shadows) { // §9: a ray towards the light; anything nearer than the light shadows
             ++stats.shadow;
-            visible = scene.transmittance(shadow, T(1));
+            visible = scene.transmittance(Ray<T>{s.shadow_from, light.position - s.shadow_from}, T(1));
         }
-        detail::add_light(s, light, L, visible);
+        detail::light_term_pass(lanes, W, 0, light.color);
     }
+    s.local = Lanes::local(lanes, W, 0);
     return detail::end_shading(scene, ray, s, depth, opt, stats);
 }
 
@@ -281,20 +401,37 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
         s[k] = begin_shading(scene, rays[k], hits[k]);
         shaded[count++] = k;
     }
-    // §9: shadow rays of as many lights as fit in one stream, light after light.
+    // §7, §9: the lights' terms in lanes (LightLanes), up to `slots` lights at a time, as many
+    // as fit their shadow rays in one stream.
+    using Lanes = LightLanes<T>;
+    constexpr std::size_t W = Lanes::width, stride = N;
+    alignas(64) T lanes[Lanes::rows * stride];
+    const std::size_t padded = (std::size_t(count) + W - 1) / W * W;
+    for (int i = 0; i < count; ++i) Lanes::set(lanes, stride, std::size_t(i), s[shaded[i]]);
+    for (std::size_t k = std::size_t(count); k < padded; ++k) Lanes::clear(lanes, stride, k);
     const std::size_t lights = scene.lights.size();
     for (std::size_t first = 0; first < lights;) {
-        Vertex<T> L[N];
         Ray<T> shadow[N];
-        int lit[N], m = 0;
-        std::size_t light_of[N], last = first;
-        for (; last < lights && m + count <= N; ++last)
-            for (int i = 0; i < count; ++i)
-                if (lit_by(s[shaded[i]], scene.lights[last], L[m], shadow[m])) lit[m] = shaded[i], light_of[m++] = last;
+        T* visible_of[N]; // each shadow ray's lane, for what it finds
+        int m = 0;
+        std::size_t last = first;
+        for (; last < lights && last - first < Lanes::slots && m + count <= N; ++last) {
+            const std::size_t slot = last - first;
+            const PointLight<T>& light = scene.lights[last];
+            for (std::size_t k = 0; k < padded; k += W) light_direction_pass(lanes + k, stride, slot, light.position);
+            const T* n_dot_l = lanes + Lanes::field(slot, Lanes::n_dot_l) * stride;
+            T* visible = lanes + Lanes::field(slot, Lanes::visible) * stride;
+            for (std::size_t k = 0; k < padded; ++k) visible[k] = T(0);
+            for (int i = 0; i < count; ++i) {
+                if (!(n_dot_l[i] > T(0))) continue; // §7: facing away → unlit, no shadow ray needed
+                const Vertex<T>& from = s[shaded[i]].shadow_from;
+                visible_of[m] = visible + i, shadow[m++] = {from, light.position - from};
+            }
+        }
         T visible[N];
         if (!opt.shadows) {
             for (int i = 0; i < m; ++i) visible[i] = T(1);
-        } else {
+        } else { // §9: a ray towards the light; anything nearer than the light shadows
             stats.shadow += std::uint64_t(m);
             T one[N];
             for (T& t : one) t = T(1);
@@ -306,9 +443,13 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
                 scene.transmittance(shadow, std::size_t(m), one, visible);
             }
         }
-        for (int i = 0; i < m; ++i) add_light(s[lit[i]], scene.lights[light_of[i]], L[i], visible[i]);
+        for (int i = 0; i < m; ++i) *visible_of[i] = visible[i];
+        for (std::size_t light = first; light < last; ++light)
+            for (std::size_t k = 0; k < padded; k += W)
+                light_term_pass(lanes + k, stride, light - first, scene.lights[light].color);
         first = last;
     }
+    for (int i = 0; i < count; ++i) s[shaded[i]].local = Lanes::local(lanes, stride, std::size_t(i));
     // §8: the reflected and the transmitted rays of every point that has them, as two streams.
     Ray<T> next[2][N];
     int counts[2] = {0, 0}, slot[2][N];
@@ -417,12 +558,13 @@ template <class T, template <class> class... S>
                 for (Color<T>& c : sum) c = {T(0), T(0), T(0)};
                 for (int sy = 0; sy < N; ++sy)
                     for (int sx = 0; sx < N; ++sx) {
-                        Ray<T> rays[detail::stream_rays];
+                        T px[detail::stream_rays], py[detail::stream_rays];
                         for (int k = 0; k < n; ++k) {
-                            const T px = T(at_x[k]) + (T(sx) + T(0.5)) / T(N) - T(0.5);
-                            const T py = T(first_row + at_y[k]) + (T(sy) + T(0.5)) / T(N) - T(0.5);
-                            rays[k] = camera.primary_ray(px, py); // §3
+                            px[k] = T(at_x[k]) + (T(sx) + T(0.5)) / T(N) - T(0.5);
+                            py[k] = T(first_row + at_y[k]) + (T(sy) + T(0.5)) / T(N) - T(0.5);
                         }
+                        Ray<T> rays[detail::stream_rays];
+                        camera.primary_rays(px, py, std::size_t(n), rays); // §3
                         local.primary += std::uint64_t(n);
                         Color<T> colour[detail::stream_rays];
                         detail::trace_stream(scene, rays, n, 0, opaque, opt, local, skip, colour);

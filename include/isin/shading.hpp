@@ -55,14 +55,20 @@ template <class T>
     return diffuse_coefficient(N, L) * object; // §7: N·L × colour
 }
 
+/// The specular highlight's falloff (§7): cos^shininess for the cosine c of the angle between the
+/// mirrored light direction and the eye's; 0 where c ≤ 0 (the highlight faces away) or is NaN.
+template <class T>
+[[nodiscard]] inline T specular_power(T c, T shininess) noexcept {
+    return c > T(0) ? std::pow(c, shininess) : T(0); // §7: cos^shininess
+}
+
 /// Specular coefficient (§7): reflect the light-to-surface direction −L about N
 /// (Rf = d − 2(d·N)N), take its cosine with V (unit, towards the eye), raise it to `shininess`.
 template <class T>
 [[nodiscard]] inline T specular_coefficient(const Vertex<T>& N, const Vertex<T>& L, const Vertex<T>& V,
                                             T shininess) noexcept {
-    const Vertex<T> Rf = reflect(-L, N);             // §7: Rf = d − 2(d·N)N with d = −L
-    const T c = dot(Rf, V);                          // §7: cos(Rf, V)
-    return c > T(0) ? std::pow(c, shininess) : T(0); // §7: cos^shininess
+    const Vertex<T> Rf = reflect(-L, N);          // §7: Rf = d − 2(d·N)N with d = −L
+    return specular_power(dot(Rf, V), shininess); // §7: cos(Rf, V)^shininess
 }
 
 /// Ambient colour (§7): object colour × a coefficient in [0,1].

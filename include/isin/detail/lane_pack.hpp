@@ -7,9 +7,12 @@
 /// Explicit registers, because GCC does not vectorise such loops at -O2 (its "very cheap" cost
 /// model), the optimisation level of CMake's RelWithDebInfo and of most distributions' packages.
 ///
-/// For one value the same functions are plain: lane_abs, lane_max, negate_where.
+/// For one value the same functions are plain: lane_abs, lane_max, negate_where, lane_sqrt and
+/// select (a where the mask holds, else b).
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <limits>
 
 #if (defined(__AVX512F__) || defined(__AVX__)) && !defined(ISIN_FORCE_PURE)
 #include <immintrin.h>
@@ -31,6 +34,14 @@ T lane_max(T a, T b) noexcept {
 template <class T>
 T negate_where(bool m, T x) noexcept {
     return m ? -x : x;
+}
+template <class T>
+T lane_sqrt(T x) noexcept {
+    return std::sqrt(x);
+}
+template <class T>
+T select(bool m, T a, T b) noexcept {
+    return m ? a : b;
 }
 
 #if defined(__AVX512F__) && !defined(ISIN_FORCE_PURE)
@@ -56,6 +67,7 @@ struct Pack<float> {
     Pack(float x) noexcept : v(_mm512_set1_ps(x)) {} // NOLINT: implicit, as a float converts
     explicit Pack(__m512 r) noexcept : v(r) {}
     static Pack load(const float* p) noexcept { return Pack(_mm512_load_ps(p)); }
+    void store(float* p) const noexcept { _mm512_store_ps(p, v); }
     friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm512_add_ps(a.v, b.v)); }
     friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm512_sub_ps(a.v, b.v)); }
     friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm512_mul_ps(a.v, b.v)); }
@@ -65,6 +77,8 @@ struct Pack<float> {
     friend Mask operator>(Pack a, Pack b) noexcept { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ)}; }
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm512_abs_ps(a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(max16(a.v, b.v)); }
+    friend Pack lane_sqrt(Pack a) noexcept { return Pack(sqrt16(a.v)); }
+    friend Pack select(Mask m, Pack a, Pack b) noexcept { return Pack(_mm512_mask_blend_ps(__mmask16(m.m), b.v, a.v)); }
     friend Pack negate_where(Mask m, Pack a) noexcept {
         const __m512i x = _mm512_castps_si512(a.v);
         return Pack(_mm512_castsi512_ps(_mm512_mask_xor_epi32(x, __mmask16(m.m), x, _mm512_set1_epi32(INT32_MIN))));
@@ -79,6 +93,7 @@ struct Pack<double> {
     Pack(double x) noexcept : v(_mm512_set1_pd(x)) {} // NOLINT: implicit, as a double converts
     explicit Pack(__m512d r) noexcept : v(r) {}
     static Pack load(const double* p) noexcept { return Pack(_mm512_load_pd(p)); }
+    void store(double* p) const noexcept { _mm512_store_pd(p, v); }
     friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm512_add_pd(a.v, b.v)); }
     friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm512_sub_pd(a.v, b.v)); }
     friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm512_mul_pd(a.v, b.v)); }
@@ -88,6 +103,8 @@ struct Pack<double> {
     friend Mask operator>(Pack a, Pack b) noexcept { return {_mm512_cmp_pd_mask(a.v, b.v, _CMP_GT_OQ)}; }
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm512_abs_pd(a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(max8(a.v, b.v)); }
+    friend Pack lane_sqrt(Pack a) noexcept { return Pack(sqrt8(a.v)); }
+    friend Pack select(Mask m, Pack a, Pack b) noexcept { return Pack(_mm512_mask_blend_pd(__mmask8(m.m), b.v, a.v)); }
     friend Pack negate_where(Mask m, Pack a) noexcept {
         const __m512i x = _mm512_castpd_si512(a.v);
         return Pack(_mm512_castsi512_pd(_mm512_mask_xor_epi64(x, __mmask8(m.m), x, _mm512_set1_epi64(INT64_MIN))));
@@ -131,6 +148,7 @@ struct Pack<float> {
     Pack(float x) noexcept : v(_mm256_set1_ps(x)) {} // NOLINT: implicit, as a float converts
     explicit Pack(__m256 r) noexcept : v(r) {}
     static Pack load(const float* p) noexcept { return Pack(_mm256_load_ps(p)); }
+    void store(float* p) const noexcept { _mm256_store_ps(p, v); }
     friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm256_add_ps(a.v, b.v)); }
     friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm256_sub_ps(a.v, b.v)); }
     friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm256_mul_ps(a.v, b.v)); }
@@ -140,6 +158,8 @@ struct Pack<float> {
     friend Mask operator>(Pack a, Pack b) noexcept { return {_mm256_cmp_ps(a.v, b.v, _CMP_GT_OQ)}; }
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm256_max_ps(a.v, b.v)); }
+    friend Pack lane_sqrt(Pack a) noexcept { return Pack(_mm256_sqrt_ps(a.v)); }
+    friend Pack select(Mask m, Pack a, Pack b) noexcept { return Pack(_mm256_blendv_ps(b.v, a.v, m.m)); }
     friend Pack negate_where(Mask m, Pack a) noexcept {
         return Pack(_mm256_xor_ps(a.v, _mm256_and_ps(m.m, _mm256_set1_ps(-0.0f))));
     }
@@ -153,6 +173,7 @@ struct Pack<double> {
     Pack(double x) noexcept : v(_mm256_set1_pd(x)) {} // NOLINT: implicit, as a double converts
     explicit Pack(__m256d r) noexcept : v(r) {}
     static Pack load(const double* p) noexcept { return Pack(_mm256_load_pd(p)); }
+    void store(double* p) const noexcept { _mm256_store_pd(p, v); }
     friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm256_add_pd(a.v, b.v)); }
     friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm256_sub_pd(a.v, b.v)); }
     friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm256_mul_pd(a.v, b.v)); }
@@ -162,11 +183,41 @@ struct Pack<double> {
     friend Mask operator>(Pack a, Pack b) noexcept { return {_mm256_cmp_pd(a.v, b.v, _CMP_GT_OQ)}; }
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm256_andnot_pd(_mm256_set1_pd(-0.0), a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm256_max_pd(a.v, b.v)); }
+    friend Pack lane_sqrt(Pack a) noexcept { return Pack(_mm256_sqrt_pd(a.v)); }
+    friend Pack select(Mask m, Pack a, Pack b) noexcept { return Pack(_mm256_blendv_pd(b.v, a.v, m.m)); }
     friend Pack negate_where(Mask m, Pack a) noexcept {
         return Pack(_mm256_xor_pd(a.v, _mm256_and_pd(m.m, _mm256_set1_pd(-0.0))));
     }
 };
 #endif
+
+/// A register of lanes as passes over arrays of T take one: Pack<T> where the target has
+/// registers of lanes, else a single value.
+template <class T>
+struct LaneRegister {
+#if defined(ISIN_DETAIL_LANE_PACKS)
+    using V = Pack<T>;
+    static constexpr std::size_t width = V::width;
+    static V load(const T* p) noexcept { return V::load(p); }
+    static void store(const V& v, T* p) noexcept { v.store(p); }
+#else
+    using V = T;
+    static constexpr std::size_t width = 1;
+    static V load(const T* p) noexcept { return *p; }
+    static void store(V v, T* p) noexcept { *p = v; }
+#endif
+};
+
+/// normalize() (vec.hpp, §2: R / |R|) of the vectors (x, y, z) of one value or a register of
+/// lanes: (0, 0, 0) where the length is 0 or not finite.
+template <class T, class V>
+void lane_normalize(V& x, V& y, V& z) noexcept {
+    const V len = lane_sqrt(x * x + y * y + z * z); // §2: |R|
+    const auto has_direction = (len > T(0)) & (len < std::numeric_limits<T>::infinity());
+    x = select(has_direction, x / len, V(T(0)));
+    y = select(has_direction, y / len, V(T(0)));
+    z = select(has_direction, z / len, V(T(0)));
+}
 
 } // namespace detail
 } // namespace isin
