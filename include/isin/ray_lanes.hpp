@@ -1,12 +1,18 @@
 #pragma once
 /// isin — many rays against one primitive at once: rays × primitives in lanes, for scenes too
-/// small for a Bvh (the note's 5 triangles and 2 spheres). `may_hit` runs a primitive's test
-/// for every ray of a RayLanes block, a register of rays at a time (AVX-512 or AVX, written
-/// once for one ray or a register: detail/lane_pack.hpp; a branch-free loop elsewhere), and
-/// answers, ray by ray, whether the primitive's own scalar test could hit: a conservative
-/// filter, never a verdict. A ray the filter drops is certain to miss; a ray it keeps is tested
-/// by the scalar function, whose hit is then the result — so the stream calls of a Scene return
-/// the single-ray calls' hits bit for bit, however the compiler rounds or fuses either loop.
+/// small for a Bvh (the note's 5 triangles and 2 spheres), a register of rays at a time
+/// (AVX-512 or AVX, written once for one ray or a register: detail/lane_pack.hpp; one ray at a
+/// time elsewhere). Two kinds of test:
+/// - `hit_lanes`, for triangles (Möller–Trumbore) and spheres (§6): the exact test, each lane
+///   deciding and computing t, u, v with intersect_moller_trumbore's and intersect's operations.
+///   Where the compiler cannot fuse a·b + c the results are the scalar tests' bit for bit; where
+///   it can, it may fuse the two differently, so a Scene tests its objects this way for one ray
+///   (lane 0) as well as for a stream: its stream calls return the single-ray calls' hits bit for
+///   bit, the passes being compiled once.
+/// - `may_hit`, a conservative filter for any primitive (a customisation point of user kinds):
+///   whether the primitive's own scalar test could hit, never a verdict. A ray the filter drops
+///   is certain to miss; a ray it keeps is tested by the scalar function, whose hit is then the
+///   result — the same bits however the compiler rounds or fuses either loop.
 ///
 /// How conservative: the lanes compute the same quantities as the scalar test, in the same
 /// precision. Each is a dot product of a cross product (or a sphere's distances), whose rounding
@@ -18,6 +24,8 @@
 ///     isin::RayLanes<float> lanes;
 ///     lanes.assign(rays, n);                                     // up to RayLanes::capacity rays
 ///     const std::uint64_t maybe = isin::may_hit(lanes, triangle); // bit k: ray k may hit
+///     isin::RayLaneHits<float> hits;
+///     const std::uint64_t hit = isin::hit_lanes(lanes, triangle, hits); // bit k: ray k hits at hits.t[k]
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -25,6 +33,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "detail/attributes.hpp"
 #include "detail/lane_pack.hpp"
 #include "error_bound.hpp"
 #include "ray.hpp"
@@ -180,6 +189,120 @@ template <class T>
         const auto behind = (s < -tol_s) & (l2 > r2 + tol_l2);
         return !(aside | behind);
     });
+}
+
+/// The hits of the rays of a RayLanes block on one primitive (hit_lanes): t (+∞ where a ray
+/// misses), u and v as Hit has them.
+template <class T>
+struct RayLaneHits {
+    alignas(64) T t[RayLanes<T>::capacity], u[RayLanes<T>::capacity], v[RayLanes<T>::capacity];
+};
+
+namespace detail {
+/// The register of lanes k … k + width of `lanes`: origins and directions.
+template <class T>
+struct RayRegister {
+    using R = LaneRegister<T>;
+    typename R::V ox, oy, oz, dx, dy, dz;
+    RayRegister(const RayLanes<T>& lanes, std::size_t k) noexcept
+        : ox(R::load(lanes.ox + k)), oy(R::load(lanes.oy + k)), oz(R::load(lanes.oz + k)), dx(R::load(lanes.dx + k)),
+          dy(R::load(lanes.dy + k)), dz(R::load(lanes.dz + k)) {}
+};
+
+/// Möller–Trumbore (note §10) for the register of rays at lane k, exactly as
+/// intersect_moller_trumbore decides and computes, without culling: a triangle that is not
+/// degenerate (the caller checks), edges e1, e2 from v0. Stores t (+∞ on a miss), u, v at k;
+/// returns the lanes hit. Compiled once, for one ray (lane 0) as for a block.
+template <class T>
+ISIN_DETAIL_NOINLINE std::uint64_t moller_trumbore_register(const RayLanes<T>& lanes, std::size_t k,
+                                                            const Vertex<T>& v0, const Vertex<T>& e1,
+                                                            const Vertex<T>& e2, RayLaneHits<T>& out) noexcept {
+    using R = LaneRegister<T>;
+    using V = typename R::V;
+    const RayRegister<T> r(lanes, k);
+    const V px = r.dy * e2.z - r.dz * e2.y; // MT: P = Rd × E2
+    const V py = r.dz * e2.x - r.dx * e2.z;
+    const V pz = r.dx * e2.y - r.dy * e2.x;
+    const V det = e1.x * px + e1.y * py + e1.z * pz; // MT: det = E1·P
+    const auto negative = det < T(0);
+    const V sign = select(negative, V(T(-1)), V(T(1)));
+    const V abs_det = det * sign;
+    const V sx = r.ox - v0.x, sy = r.oy - v0.y, sz = r.oz - v0.z; // MT: S = Ro − V0
+    const V U = (sx * px + sy * py + sz * pz) * sign;             // MT: u = S·P / det
+    const V qx = sy * e1.z - sz * e1.y;                           // MT: Q = S × E1
+    const V qy = sz * e1.x - sx * e1.z;
+    const V qz = sx * e1.y - sy * e1.x;
+    const V Vd = (r.dx * qx + r.dy * qy + r.dz * qz) * sign; // MT: v = Rd·Q / det
+    const V tt = (e2.x * qx + e2.y * qy + e2.z * qz) * sign; // MT: t = E2·Q / det
+    const V inv_det = T(1) / abs_det;
+    const V t = tt * inv_det;
+    const auto hit = (det != T(0)) & (U >= T(0)) & (U <= abs_det) & (Vd >= T(0)) & (U + Vd <= abs_det) & (tt > T(0)) &
+                     (t > T(0)) & (t < std::numeric_limits<T>::infinity());
+    R::store(select(hit, t, V(std::numeric_limits<T>::infinity())), out.t + k);
+    R::store(U * inv_det, out.u + k);
+    R::store(Vd * inv_det, out.v + k);
+    return lane_bits(hit) << k;
+}
+
+/// The §6 sphere test for the register of rays at lane k, exactly as intersect(ray, sphere)
+/// decides and computes, for a sphere of finite positive radius (the caller checks); `band0` is
+/// surface_band's part that does not depend on the ray. Stores t (+∞ on a miss) and u = v = 0.
+template <class T>
+ISIN_DETAIL_NOINLINE std::uint64_t sphere_register(const RayLanes<T>& lanes, std::size_t k, const Sphere<T>& sp,
+                                                   T band0, RayLaneHits<T>& out) noexcept {
+    using R = LaneRegister<T>;
+    using V = typename R::V;
+    constexpr T inf = std::numeric_limits<T>::infinity();
+    const RayRegister<T> r(lanes, k);
+    const V a = r.dx * r.dx + r.dy * r.dy + r.dz * r.dz;
+    const V inv_a = T(1) / a;                                                          // 1 for the note's unit Rd
+    const V lx = sp.center.x - r.ox, ly = sp.center.y - r.oy, lz = sp.center.z - r.oz; // §6: l = C − Ro
+    const V s = (lx * r.dx + ly * r.dy + lz * r.dz) * inv_a;                           // §6: s = l·Rd
+    const V l2 = lx * lx + ly * ly + lz * lz;                                          // §6: l2 = l·l
+    const T r2 = sp.radius * sp.radius;                                                // §6: r2 = r²
+    const V mx = lx - s * r.dx, my = ly - s * r.dy, mz = lz - s * r.dz;
+    const V m2 = mx * mx + my * my + mz * mz;                                              // §6: m2 = |l − s·Rd|²
+    const V q = lane_sqrt((r2 - m2) * inv_a);                                              // §6: q = √(r2 − m2)
+    const V c = (l2 - r2) * inv_a;                                                         // t_near · t_far
+    const auto on_surface = lane_abs(l2 - r2) <= band0 + rounding_gamma<T>(6) * (l2 + r2); // surface_band
+    const auto outside = l2 > r2;
+    const V inside_t = select(s >= T(0), s + q, c / (s - q));                      // §6: t = s + q
+    const V t = select(on_surface, s + q, select(outside, c / (s + q), inside_t)); // §6, §8 fix
+    const auto ahead = !((s < T(0)) & outside);                                    // §6: not behind an origin outside
+    const auto not_leaving = (s > T(0)) | !on_surface; // §8 fix: from the surface, only inwards
+    const auto hit = (a > T(0)) & (a < inf) & ahead & (m2 <= r2) & not_leaving & (t > T(0)) & (t < inf);
+    R::store(select(hit, t, V(inf)), out.t + k);
+    R::store(V(T(0)), out.u + k);
+    R::store(V(T(0)), out.v + k);
+    return lane_bits(hit) << k;
+}
+} // namespace detail
+
+/// The hits of every ray of `lanes` on `tri` by Möller–Trumbore without culling (bit k: ray k
+/// hits, at out.t[k] with out.u[k], out.v[k]): intersect_moller_trumbore's decisions and
+/// quantities, a register of rays at a time. The Scene tests its triangles this way for one
+/// ray as for a stream, so that both give the same bits whatever the compiler fuses.
+template <class T>
+std::uint64_t hit_lanes(const RayLanes<T>& lanes, const Triangle<T>& tri, RayLaneHits<T>& out) noexcept {
+    const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+    if (detail::is_degenerate(e1, e2, cross(e1, e2))) return 0; // MT never hits it
+    std::uint64_t hits = 0;
+    for (std::size_t k = 0; k < lanes.padded; k += detail::LaneRegister<T>::width)
+        hits |= detail::moller_trumbore_register(lanes, k, tri.v0, e1, e2, out);
+    return lanes.count == RayLanes<T>::capacity ? hits : hits & ((std::uint64_t(1) << lanes.count) - 1);
+}
+
+/// The hits of every ray of `lanes` on `sp` by the §6 test (intersect(ray, sphere)), as
+/// hit_lanes for triangles.
+template <class T>
+std::uint64_t hit_lanes(const RayLanes<T>& lanes, const Sphere<T>& sp, RayLaneHits<T>& out) noexcept {
+    if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return 0;
+    const T e = T(1.7320508075688772) * surface_point_error(sp); // surface_band's √3·e
+    const T band0 = e * (T(2) * sp.radius + e);
+    std::uint64_t hits = 0;
+    for (std::size_t k = 0; k < lanes.padded; k += detail::LaneRegister<T>::width)
+        hits |= detail::sphere_register(lanes, k, sp, band0, out);
+    return lanes.count == RayLanes<T>::capacity ? hits : hits & ((std::uint64_t(1) << lanes.count) - 1);
 }
 
 } // namespace isin

@@ -158,11 +158,20 @@ template <class T>
 }
 
 /// Which rays of a block may hit the primitive (optional customisation point, ray_lanes.hpp): a
-/// kind that has it is tested rays × primitives in lanes by the stream calls of a scene too small
-/// for its Bvh, each kept ray then by intersect_primitive. Textured triangles as their triangle.
+/// kind that has it (and no hit_lanes) is tested rays × primitives in lanes by the stream calls of
+/// a scene too small for its Bvh, each kept ray then by intersect_primitive. Textured triangles
+/// as their triangle.
 template <class T>
 [[nodiscard]] inline std::uint64_t may_hit(const RayLanes<T>& lanes, const TexturedTriangle<T>& tri) noexcept {
     return may_hit(lanes, tri.triangle);
+}
+
+/// The exact test of every ray of a block on the primitive (ray_lanes.hpp), for the built-in
+/// kinds: where the Scene tests a kind's objects one after another, it tests them this way for
+/// one ray (lane 0) and for the rays of a stream, so that both give the same bits.
+template <class T>
+inline std::uint64_t hit_lanes(const RayLanes<T>& lanes, const TexturedTriangle<T>& tri, RayLaneHits<T>& out) noexcept {
+    return hit_lanes(lanes, tri.triangle, out);
 }
 
 namespace detail {
@@ -172,6 +181,12 @@ template <class T, class Shape>
 struct has_lane_filter<T, Shape,
                        std::void_t<decltype(may_hit(std::declval<const RayLanes<T>&>(), std::declval<const Shape&>()))>>
     : std::true_type {};
+template <class T, class Shape, class = void>
+struct has_lane_hits : std::false_type {};
+template <class T, class Shape>
+struct has_lane_hits<T, Shape,
+                     std::void_t<decltype(hit_lanes(std::declval<const RayLanes<T>&>(), std::declval<const Shape&>(),
+                                                    std::declval<RayLaneHits<T>&>()))>> : std::true_type {};
 } // namespace detail
 
 /// Whether a primitive kind is a triangle: a Bvh of it tests blocks of 8 with the watertight
@@ -556,6 +571,7 @@ public:
     /// (ray_lanes.hpp), the rest ray by ray.
     void transmittance(const Ray<T>* rays, std::size_t count, const T* t_max, T* through) const {
         RayLanes<T> lanes;
+        RayLaneHits<T> exact;
         for (std::size_t first = 0; first < count; first += stream_chunk) {
             const std::size_t n = std::min(stream_chunk, count - first);
             const Ray<T>* r = rays + first;
@@ -573,12 +589,11 @@ public:
                 std::uint64_t open = 0; // rays that light still gets through
                 for (std::size_t k = 0; k < n; ++k) open |= std::uint64_t(out[k] > T(0)) << k;
                 for (std::size_t i = 0; i < vec.size() && open; ++i)
-                    for (std::uint64_t maybe = lane_filter(lanes, vec[i].shape) & open; maybe; maybe &= maybe - 1) {
-                        const int k = detail::lowest_bit(maybe);
-                        if (!(intersect_primitive(r[k], vec[i].shape, triangle_method).t < limit[k])) continue;
+                    each_lane_hit(lanes, r, vec[i].shape, open, exact, [&](int k, const Hit<T>& h) {
+                        if (!(h.t < limit[k])) return;
                         out[k] *= material(vec[i].material).transparency;
                         if (!(out[k] > T(0))) open &= ~(std::uint64_t(1) << k);
-                    }
+                    });
             });
             for (std::size_t k = 0; k < n; ++k) {
                 if (out[k] > T(0) && !instances_.empty()) out[k] *= placements_transmittance(r[k], limit[k]);
@@ -710,11 +725,59 @@ private:
         } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
             return nearest_in_tree(*accel.objects, vec, kind, ray, mask, t, best);
         }
-        for (std::size_t i = 0; i < vec.size(); ++i) {
-            if (mask && mask[i]) continue;
-            Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
+        one_by_one(vec, ray, mask, [&](std::size_t i, Hit<T> h) {
             h.primitive = static_cast<std::uint32_t>(i);
             take(h);
+            return false;
+        });
+    }
+
+    // Whether kind Shape's objects, where the Scene tests them one after another, take the exact
+    // test in lanes (hit_lanes, ray_lanes.hpp): the built-in kinds, triangles by Möller–Trumbore.
+    template <class Shape>
+    [[nodiscard]] bool exact_in_lanes() const noexcept {
+        if constexpr (!detail::has_lane_hits<T, Shape>::value)
+            return false;
+        else if constexpr (is_triangle_kind<Shape>::value)
+            return triangle_method == TriangleMethod::moller_trumbore;
+        else
+            return true;
+    }
+
+    // One ray's tests of single objects: hit(shape) is the ray's hit on it (or a miss), through
+    // hit_lanes with the ray in lane 0 where the kind has it (exact_in_lanes), as the stream calls
+    // test the rays of a stream, else intersect_primitive.
+    class OneRay {
+    public:
+        OneRay(const Scene& scene, const Ray<T>& ray) noexcept : scene_(scene), ray_(ray) {}
+        template <class Shape>
+        Hit<T> hit(const Shape& shape) {
+            if constexpr (detail::has_lane_hits<T, Shape>::value) {
+                if (scene_.exact_in_lanes<Shape>()) {
+                    if (!lanes_set_) lanes_.assign(&ray_, 1), lanes_set_ = true;
+                    if (!hit_lanes(lanes_, shape, found_)) return Hit<T>::miss();
+                    return Hit<T>::at(found_.t[0], found_.u[0], found_.v[0]);
+                }
+            }
+            return intersect_primitive(ray_, shape, scene_.triangle_method);
+        }
+
+    private:
+        const Scene& scene_;
+        const Ray<T>& ray_;
+        bool lanes_set_ = false;
+        RayLanes<T> lanes_;
+        RayLaneHits<T> found_;
+    };
+
+    // Calls f(i, hit) for the objects of `vec` in order (but those `skip` names), with the hit of
+    // `ray` on each (OneRay), until f returns true.
+    template <class Objects, class F>
+    void one_by_one(const Objects& vec, const Ray<T>& ray, const std::uint8_t* skip, F&& f) const {
+        OneRay one(*this, ray);
+        for (std::size_t i = 0; i < vec.size(); ++i) {
+            if (skip && skip[i]) continue;
+            if (f(i, one.hit(vec[i].shape))) return;
         }
     }
 
@@ -730,17 +793,17 @@ private:
                 return accel.batch->nearest(ray, t_max).t < t_max;
         } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
             T t = t_max;
+            OneRay one(*this, ray);
             return traverse<Visit::any>(*accel.objects, ray, t, [&](std::uint32_t leaf, T&) {
                 const auto& l = accel.objects->leaves()[leaf];
                 for (std::uint32_t j = l.first; j < l.first + l.count; ++j)
-                    if (intersect_primitive(ray, vec[accel.objects->primitives()[j]].shape, triangle_method).t < t_max)
-                        return true;
+                    if (one.hit(vec[accel.objects->primitives()[j]].shape).t < t_max) return true;
                 return false;
             });
         }
-        for (std::size_t i = 0; i < vec.size(); ++i)
-            if (intersect_primitive(ray, vec[i].shape, triangle_method).t < t_max) return true;
-        return false;
+        bool blocked = false;
+        one_by_one(vec, ray, nullptr, [&](std::size_t, const Hit<T>& h) { return blocked = h.t < t_max; });
+        return blocked;
     }
 
     // Multiplies `through` (> 0) by the transparencies of the objects of kind `kind` that `ray`
@@ -768,8 +831,8 @@ private:
             through *= tree_transmittance(*accel.objects, vec, ray, t_max);
             return;
         }
-        for (std::size_t i = 0; i < vec.size() && through > T(0); ++i)
-            if (intersect_primitive(ray, vec[i].shape, triangle_method).t < t_max) (void)pass(vec[i].material);
+        one_by_one(vec, ray, nullptr,
+                   [&](std::size_t i, const Hit<T>& h) { return h.t < t_max && !pass(vec[i].material); });
     }
 
     // may_hit for a kind that has it; every ray for one that has not (in_lanes keeps such kinds
@@ -780,7 +843,35 @@ private:
             return may_hit(lanes, shape);
         } else {
             (void)shape;
-            return lanes.count >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << lanes.count) - 1;
+            return all_rays(lanes.count);
+        }
+    }
+
+    // The bits of rays [0, n) of a block.
+    [[nodiscard]] static std::uint64_t all_rays(std::size_t n) noexcept {
+        return n >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
+    }
+
+    // Calls f(k, hit) for rays k of `open` (bits of the block `lanes` holds, rays[k]) that may hit
+    // `shape`, in order of k: those the exact test in lanes hits (hit_lanes) where the kind has it
+    // (exact_in_lanes, as one_by_one tests one ray), else those the kind's filter keeps (may_hit)
+    // with intersect_primitive's hit or miss. `exact` is scratch space.
+    template <class Shape, class F>
+    void each_lane_hit(const RayLanes<T>& lanes, const Ray<T>* rays, const Shape& shape, std::uint64_t open,
+                       RayLaneHits<T>& exact, F&& f) const {
+        if constexpr (detail::has_lane_hits<T, Shape>::value) {
+            if (exact_in_lanes<Shape>()) {
+                for (std::uint64_t hit = hit_lanes(lanes, shape, exact) & open; hit; hit &= hit - 1) {
+                    const int k = detail::lowest_bit(hit);
+                    f(k, Hit<T>::at(exact.t[k], exact.u[k], exact.v[k]));
+                }
+                return;
+            }
+        }
+        (void)exact;
+        for (std::uint64_t maybe = lane_filter(lanes, shape) & open; maybe; maybe &= maybe - 1) {
+            const int k = detail::lowest_bit(maybe);
+            f(k, intersect_primitive(rays[k], shape, triangle_method));
         }
     }
 
@@ -833,6 +924,7 @@ private:
         T t[stream_chunk];
         Hit<T> found[stream_chunk];
         RayLanes<T> lanes;
+        RayLaneHits<T> exact;
         for (std::size_t first = 0; first < count; first += stream_chunk) {
             const std::size_t n = std::min(stream_chunk, count - first);
             const Ray<T>* rays = chunk_of(ray_at, first, n, copy);
@@ -844,20 +936,18 @@ private:
                 const auto& accel = std::get<kind>(accel_);
                 const std::uint8_t* mask =
                     culled && !culled->objects[kind].empty() ? culled->objects[kind].data() : nullptr;
-                if (in_lanes(kind, vec, mask != nullptr)) { // as nearest_of_kind's loop, without certain misses
+                if (in_lanes(kind, vec, mask != nullptr)) { // as nearest_of_kind's loop
                     if (!lanes_set) lanes.assign(rays, n), lanes_set = true;
                     for (std::size_t i = 0; i < vec.size(); ++i) {
                         if (mask && mask[i]) continue;
-                        for (std::uint64_t maybe = lane_filter(lanes, vec[i].shape); maybe; maybe &= maybe - 1) {
-                            const int k = detail::lowest_bit(maybe);
-                            const Hit<T> h = intersect_primitive(rays[k], vec[i].shape, triangle_method);
-                            if (!(h.t < t[k])) continue;
+                        each_lane_hit(lanes, rays, vec[i].shape, all_rays(n), exact, [&](int k, const Hit<T>& h) {
+                            if (!(h.t < t[k])) return;
                             // field by field: a whole-struct copy of h read it back from the stack
                             // wider than it had been stored, a store-forwarding stall per hit
                             t[k] = h.t, best[k].t = h.t, best[k].u = h.u, best[k].v = h.v;
                             best[k].primitive = static_cast<std::uint32_t>(i);
                             best[k].geometry = static_cast<std::uint32_t>(kind);
-                        }
+                        });
                     }
                     return;
                 }
@@ -900,6 +990,7 @@ private:
         T limit[stream_chunk];
         std::uint8_t hit[stream_chunk];
         RayLanes<T> lanes;
+        RayLaneHits<T> exact;
         for (std::size_t first = 0; first < count; first += stream_chunk) {
             bool lanes_set = false;
             const std::size_t n = std::min(stream_chunk, count - first);
@@ -919,17 +1010,16 @@ private:
                     if (accel.triangles && uses(Acceleration::bvh, kind, vec.size()))
                         return through_bvh(*accel.triangles, rays);
                 }
-                if (in_lanes(kind, vec, false)) { // as occluded_by_kind's loop, without certain misses
+                if (in_lanes(kind, vec, false)) { // as occluded_by_kind's loop
                     if (!lanes_set) lanes.assign(rays, n), lanes_set = true;
                     std::uint64_t open = 0; // rays not blocked yet
                     for (std::size_t k = 0; k < n; ++k) open |= std::uint64_t(out[k] == 0) << k;
                     for (std::size_t i = 0; i < vec.size() && open; ++i)
-                        for (std::uint64_t maybe = lane_filter(lanes, vec[i].shape) & open; maybe; maybe &= maybe - 1) {
-                            const int k = detail::lowest_bit(maybe);
-                            if (!(intersect_primitive(rays[k], vec[i].shape, triangle_method).t < limit[k])) continue;
+                        each_lane_hit(lanes, rays, vec[i].shape, open, exact, [&](int k, const Hit<T>& h) {
+                            if (!(h.t < limit[k])) return;
                             out[k] = 1;
                             open &= ~(std::uint64_t(1) << k);
-                        }
+                        });
                     return;
                 }
                 for (std::size_t k = 0; k < n; ++k)
@@ -958,12 +1048,13 @@ private:
     template <class Objects>
     void nearest_in_tree(const BvhTree<T>& tree, const Objects& vec, std::size_t kind, const Ray<T>& ray,
                          const std::uint8_t* mask, T& t, Hit<T>& best) const {
+        OneRay one(*this, ray);
         traverse<Visit::nearest>(tree, ray, t, [&](std::uint32_t leaf, T&) {
             const auto& l = tree.leaves()[leaf];
             for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
                 const std::uint32_t i = tree.primitives()[j];
                 if (mask && mask[i]) continue;
-                const Hit<T> h = intersect_primitive(ray, vec[i].shape, triangle_method);
+                const Hit<T> h = one.hit(vec[i].shape);
                 if (!(h.t < t)) continue;
                 t = h.t, best = h;
                 best.primitive = i, best.geometry = static_cast<std::uint32_t>(kind);
@@ -976,11 +1067,12 @@ private:
     template <class Objects>
     T tree_transmittance(const BvhTree<T>& tree, const Objects& vec, const Ray<T>& ray, T t_max) const {
         T through = T(1), t = t_max;
+        OneRay one(*this, ray);
         traverse<Visit::any>(tree, ray, t, [&](std::uint32_t leaf, T&) {
             const auto& l = tree.leaves()[leaf];
             for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
                 const std::uint32_t i = tree.primitives()[j];
-                if (!(intersect_primitive(ray, vec[i].shape, triangle_method).t < t_max)) continue;
+                if (!(one.hit(vec[i].shape).t < t_max)) continue;
                 through *= material(vec[i].material).transparency;
                 if (!(through > T(0))) return true;
             }

@@ -75,6 +75,11 @@ struct Pack<float> {
     friend Pack operator-(Pack a) noexcept { return negate_where(Mask{0xffffu}, a); }
     friend Mask operator<(Pack a, Pack b) noexcept { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ)}; }
     friend Mask operator>(Pack a, Pack b) noexcept { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ)}; }
+    friend Mask operator<=(Pack a, Pack b) noexcept { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ)}; }
+    friend Mask operator>=(Pack a, Pack b) noexcept { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ)}; }
+    friend Mask operator!=(Pack a, Pack b) noexcept {
+        return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_NEQ_UQ)};
+    } // NaN ≠ anything
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm512_abs_ps(a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(max16(a.v, b.v)); }
     friend Pack lane_sqrt(Pack a) noexcept { return Pack(sqrt16(a.v)); }
@@ -101,6 +106,11 @@ struct Pack<double> {
     friend Pack operator-(Pack a) noexcept { return negate_where(Mask{0xffu}, a); }
     friend Mask operator<(Pack a, Pack b) noexcept { return {_mm512_cmp_pd_mask(a.v, b.v, _CMP_LT_OQ)}; }
     friend Mask operator>(Pack a, Pack b) noexcept { return {_mm512_cmp_pd_mask(a.v, b.v, _CMP_GT_OQ)}; }
+    friend Mask operator<=(Pack a, Pack b) noexcept { return {_mm512_cmp_pd_mask(a.v, b.v, _CMP_LE_OQ)}; }
+    friend Mask operator>=(Pack a, Pack b) noexcept { return {_mm512_cmp_pd_mask(a.v, b.v, _CMP_GE_OQ)}; }
+    friend Mask operator!=(Pack a, Pack b) noexcept {
+        return {_mm512_cmp_pd_mask(a.v, b.v, _CMP_NEQ_UQ)};
+    } // NaN ≠ anything
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm512_abs_pd(a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(max8(a.v, b.v)); }
     friend Pack lane_sqrt(Pack a) noexcept { return Pack(sqrt8(a.v)); }
@@ -156,6 +166,9 @@ struct Pack<float> {
     friend Pack operator-(Pack a) noexcept { return Pack(_mm256_xor_ps(a.v, _mm256_set1_ps(-0.0f))); }
     friend Mask operator<(Pack a, Pack b) noexcept { return {_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ)}; }
     friend Mask operator>(Pack a, Pack b) noexcept { return {_mm256_cmp_ps(a.v, b.v, _CMP_GT_OQ)}; }
+    friend Mask operator<=(Pack a, Pack b) noexcept { return {_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ)}; }
+    friend Mask operator>=(Pack a, Pack b) noexcept { return {_mm256_cmp_ps(a.v, b.v, _CMP_GE_OQ)}; }
+    friend Mask operator!=(Pack a, Pack b) noexcept { return {_mm256_cmp_ps(a.v, b.v, _CMP_NEQ_UQ)}; } // NaN ≠ anything
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm256_max_ps(a.v, b.v)); }
     friend Pack lane_sqrt(Pack a) noexcept { return Pack(_mm256_sqrt_ps(a.v)); }
@@ -181,6 +194,9 @@ struct Pack<double> {
     friend Pack operator-(Pack a) noexcept { return Pack(_mm256_xor_pd(a.v, _mm256_set1_pd(-0.0))); }
     friend Mask operator<(Pack a, Pack b) noexcept { return {_mm256_cmp_pd(a.v, b.v, _CMP_LT_OQ)}; }
     friend Mask operator>(Pack a, Pack b) noexcept { return {_mm256_cmp_pd(a.v, b.v, _CMP_GT_OQ)}; }
+    friend Mask operator<=(Pack a, Pack b) noexcept { return {_mm256_cmp_pd(a.v, b.v, _CMP_LE_OQ)}; }
+    friend Mask operator>=(Pack a, Pack b) noexcept { return {_mm256_cmp_pd(a.v, b.v, _CMP_GE_OQ)}; }
+    friend Mask operator!=(Pack a, Pack b) noexcept { return {_mm256_cmp_pd(a.v, b.v, _CMP_NEQ_UQ)}; } // NaN ≠ anything
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm256_andnot_pd(_mm256_set1_pd(-0.0), a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm256_max_pd(a.v, b.v)); }
     friend Pack lane_sqrt(Pack a) noexcept { return Pack(_mm256_sqrt_pd(a.v)); }
@@ -189,6 +205,15 @@ struct Pack<double> {
         return Pack(_mm256_xor_pd(a.v, _mm256_and_pd(m.m, _mm256_set1_pd(-0.0))));
     }
 };
+#endif
+
+/// The lanes where a comparison of one value holds: bit 0.
+inline std::uint64_t lane_bits(bool m) noexcept { return m ? 1u : 0u; }
+#if defined(ISIN_DETAIL_LANE_PACKS)
+template <class M>
+std::uint64_t lane_bits(const M& m) noexcept {
+    return m.bits();
+}
 #endif
 
 /// A register of lanes as passes over arrays of T take one: Pack<T> where the target has
