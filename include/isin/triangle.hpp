@@ -264,7 +264,8 @@ template <class T>
 } // namespace detail
 
 template <class T>
-[[nodiscard]] inline BoundedPoint<T> hit_point(const Ray<T>&, const Triangle<T>& tri, const Hit<T>& hit) noexcept {
+[[nodiscard]] ISIN_DETAIL_INLINE BoundedPoint<T> hit_point(const Ray<T>&, const Triangle<T>& tri,
+                                                           const Hit<T>& hit) noexcept {
     return detail::triangle_hit_point(tri, hit, normal(tri));
 }
 
