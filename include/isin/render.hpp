@@ -150,61 +150,36 @@ Shading<T> begin_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const H
 // lane, so a point gets the same colour bit for bit whatever its lane.
 template <class T>
 struct LightLanes : LaneRegister<T> {
+    // clang-format off
     enum Field : std::size_t {
-        px,
-        py,
-        pz,
-        nx,
-        ny,
-        nz,
-        vx,
-        vy,
-        vz,
-        kd,
-        ks,
-        shininess,
-        cr,
-        cg,
-        cb,
-        sr,
-        sg,
-        sb,
-        lr,
-        lg,
-        lb,
+        px, py, pz,         // the point lit
+        nx, ny, nz,         // the normal it is lit by (Ns)
+        vx, vy, vz,         // towards the eye (V)
+        kd, ks, shininess,  // the material's Phong weights
+        cr, cg, cb,         // the surface's colour (object)
+        sr, sg, sb,         // the highlight's
+        lr, lg, lb,         // the local colour so far: the ambient term, then each light's
         fields
     };
+    // clang-format on
     enum PerLight : std::size_t { lx, ly, lz, n_dot_l, visible, per_light };
     static constexpr std::size_t slots = 4; // lights at a time
     static constexpr std::size_t rows = fields + slots * per_light;
     // Field f of light slot `slot`.
     static constexpr std::size_t field(std::size_t slot, PerLight f) noexcept { return fields + slot * per_light + f; }
 
-    // Lane k holds shaded point s: the point lit, the normal it is lit by, the eye's direction,
-    // the material's Phong weights, the surface colour (object), the highlight's, and the local
-    // colour so far (the ambient term, begin_shading).
+    // Lane k holds shaded point s.
     static void set(T* lanes, std::size_t stride, std::size_t k, const Shading<T>& s) noexcept {
-        const T values[fields] = {s.sp.point.x,
-                                  s.sp.point.y,
-                                  s.sp.point.z,
-                                  s.Ns.x,
-                                  s.Ns.y,
-                                  s.Ns.z,
-                                  s.V.x,
-                                  s.V.y,
-                                  s.V.z,
-                                  s.m->kd,
-                                  s.m->ks,
-                                  s.m->shininess,
-                                  s.object.r,
-                                  s.object.g,
-                                  s.object.b,
-                                  s.m->specular_color.r,
-                                  s.m->specular_color.g,
-                                  s.m->specular_color.b,
-                                  s.local.r,
-                                  s.local.g,
-                                  s.local.b};
+        const Material<T>& m = *s.m;
+        // clang-format off
+        const T values[fields] = {s.sp.point.x, s.sp.point.y, s.sp.point.z,
+                                  s.Ns.x, s.Ns.y, s.Ns.z,
+                                  s.V.x, s.V.y, s.V.z,
+                                  m.kd, m.ks, m.shininess,
+                                  s.object.r, s.object.g, s.object.b,
+                                  m.specular_color.r, m.specular_color.g, m.specular_color.b,
+                                  s.local.r, s.local.g, s.local.b};
+        // clang-format on
         for (std::size_t f = 0; f < fields; ++f) lanes[f * stride + k] = values[f];
     }
     // Lane k holds nothing: zeros, which no light lights (N·L = 0).
