@@ -167,14 +167,15 @@ public:
     }
 
 private:
-    // A register of lanes of image points (x, y) (unused lanes hold the first) and what rays_pass
+    // A register of lanes of image points (x, y) (unused lanes hold the first's) and what rays_pass
     // makes of them: GD's x, y, z and the unit direction's.
     struct Lanes {
         static constexpr std::size_t width = detail::LaneRegister<T>::width;
         alignas(64) T x[width], y[width];
         alignas(64) T out[6][width];
-        Lanes(T x0, T y0) noexcept {
-            for (std::size_t k = 0; k < width; ++k) x[k] = x0, y[k] = y0;
+        Lanes(T x0, T y0) noexcept { // stored whole: rays_pass's loads then take what one store wrote
+            detail::LaneRegister<T>::store(typename detail::LaneRegister<T>::V(x0), x);
+            detail::LaneRegister<T>::store(typename detail::LaneRegister<T>::V(y0), y);
         }
     };
     // §3 for a register of lanes: the image-plane points GD of (x, y) and the unit directions

@@ -199,61 +199,65 @@ struct RayLaneHits {
 };
 
 namespace detail {
-/// The register of lanes k … k + width of `lanes`: origins and directions.
+/// A register of rays: lanes k … k + width of a RayLanes block, or one ray in every lane.
 template <class T>
 struct RayRegister {
     using R = LaneRegister<T>;
-    typename R::V ox, oy, oz, dx, dy, dz;
+    using V = typename R::V;
+    V ox, oy, oz, dx, dy, dz;
     RayRegister(const RayLanes<T>& lanes, std::size_t k) noexcept
         : ox(R::load(lanes.ox + k)), oy(R::load(lanes.oy + k)), oz(R::load(lanes.oz + k)), dx(R::load(lanes.dx + k)),
           dy(R::load(lanes.dy + k)), dz(R::load(lanes.dz + k)) {}
+    explicit RayRegister(const Ray<T>& ray) noexcept
+        : ox(ray.origin.x), oy(ray.origin.y), oz(ray.origin.z), dx(ray.direction.x), dy(ray.direction.y),
+          dz(ray.direction.z) {}
 };
 
-/// Möller–Trumbore (note §10) for the register of rays at lane k, exactly as
-/// intersect_moller_trumbore decides and computes, without culling: a triangle that is not
-/// degenerate (the caller checks), edges e1, e2 from v0. Stores t (+∞ on a miss), u, v at k;
-/// returns the lanes hit. Compiled once, for one ray (lane 0) as for a block.
+/// Möller–Trumbore (note §10) for a register of rays, exactly as intersect_moller_trumbore
+/// decides and computes, without culling, for a triangle with edges e1, e2 from v0 (a degenerate
+/// one, checked as there on the hit path only, is never hit). Returns the lanes hit (bit 0 for the register's first),
+/// and stores their t, u, v (the other lanes' are unspecified); a register that misses whole
+/// leaves early. Compiled once: one ray and a block's registers get the same instructions.
 template <class T>
-ISIN_DETAIL_NOINLINE std::uint64_t moller_trumbore_register(const RayLanes<T>& lanes, std::size_t k,
-                                                            const Vertex<T>& v0, const Vertex<T>& e1,
-                                                            const Vertex<T>& e2, RayLaneHits<T>& out) noexcept {
+ISIN_DETAIL_NOINLINE std::uint64_t moller_trumbore_register(const RayRegister<T>& r, const Vertex<T>& v0,
+                                                            const Vertex<T>& e1, const Vertex<T>& e2, T* t_out,
+                                                            T* u_out, T* v_out) noexcept {
     using R = LaneRegister<T>;
     using V = typename R::V;
-    const RayRegister<T> r(lanes, k);
     const V px = r.dy * e2.z - r.dz * e2.y; // MT: P = Rd × E2
     const V py = r.dz * e2.x - r.dx * e2.z;
     const V pz = r.dx * e2.y - r.dy * e2.x;
     const V det = e1.x * px + e1.y * py + e1.z * pz; // MT: det = E1·P
-    const auto negative = det < T(0);
-    const V sign = select(negative, V(T(-1)), V(T(1)));
+    const V sign = select(det < T(0), V(T(-1)), V(T(1)));
     const V abs_det = det * sign;
     const V sx = r.ox - v0.x, sy = r.oy - v0.y, sz = r.oz - v0.z; // MT: S = Ro − V0
     const V U = (sx * px + sy * py + sz * pz) * sign;             // MT: u = S·P / det
-    const V qx = sy * e1.z - sz * e1.y;                           // MT: Q = S × E1
+    auto hit = (det != T(0)) & (U >= T(0)) & (U <= abs_det);
+    if (lane_bits(hit) == 0) return 0;
+    const V qx = sy * e1.z - sz * e1.y; // MT: Q = S × E1
     const V qy = sz * e1.x - sx * e1.z;
     const V qz = sx * e1.y - sy * e1.x;
     const V Vd = (r.dx * qx + r.dy * qy + r.dz * qz) * sign; // MT: v = Rd·Q / det
     const V tt = (e2.x * qx + e2.y * qy + e2.z * qz) * sign; // MT: t = E2·Q / det
+    hit = hit & (Vd >= T(0)) & (U + Vd <= abs_det) & (tt > T(0));
+    if (lane_bits(hit) == 0 || is_degenerate(e1, e2, cross(e1, e2))) return 0;
     const V inv_det = T(1) / abs_det;
     const V t = tt * inv_det;
-    const auto hit = (det != T(0)) & (U >= T(0)) & (U <= abs_det) & (Vd >= T(0)) & (U + Vd <= abs_det) & (tt > T(0)) &
-                     (t > T(0)) & (t < std::numeric_limits<T>::infinity());
-    R::store(select(hit, t, V(std::numeric_limits<T>::infinity())), out.t + k);
-    R::store(U * inv_det, out.u + k);
-    R::store(Vd * inv_det, out.v + k);
-    return lane_bits(hit) << k;
+    hit = hit & (t > T(0)) & (t < std::numeric_limits<T>::infinity());
+    R::store(t, t_out), R::store(U * inv_det, u_out), R::store(Vd * inv_det, v_out);
+    return lane_bits(hit);
 }
 
-/// The §6 sphere test for the register of rays at lane k, exactly as intersect(ray, sphere)
-/// decides and computes, for a sphere of finite positive radius (the caller checks); `band0` is
-/// surface_band's part that does not depend on the ray. Stores t (+∞ on a miss) and u = v = 0.
+/// The §6 sphere test for a register of rays, exactly as intersect(ray, sphere) decides and
+/// computes, for a sphere of finite positive radius (the caller checks); `band0` is
+/// surface_band's part that does not depend on the ray. As moller_trumbore_register: the lanes
+/// hit, their t (u = v = 0) stored.
 template <class T>
-ISIN_DETAIL_NOINLINE std::uint64_t sphere_register(const RayLanes<T>& lanes, std::size_t k, const Sphere<T>& sp,
-                                                   T band0, RayLaneHits<T>& out) noexcept {
+ISIN_DETAIL_NOINLINE std::uint64_t sphere_register(const RayRegister<T>& r, const Sphere<T>& sp, T band0, T* t_out,
+                                                   T* u_out, T* v_out) noexcept {
     using R = LaneRegister<T>;
     using V = typename R::V;
     constexpr T inf = std::numeric_limits<T>::infinity();
-    const RayRegister<T> r(lanes, k);
     const V a = r.dx * r.dx + r.dy * r.dy + r.dz * r.dz;
     const V inv_a = T(1) / a;                                                          // 1 for the note's unit Rd
     const V lx = sp.center.x - r.ox, ly = sp.center.y - r.oy, lz = sp.center.z - r.oz; // §6: l = C − Ro
@@ -261,47 +265,48 @@ ISIN_DETAIL_NOINLINE std::uint64_t sphere_register(const RayLanes<T>& lanes, std
     const V l2 = lx * lx + ly * ly + lz * lz;                                          // §6: l2 = l·l
     const T r2 = sp.radius * sp.radius;                                                // §6: r2 = r²
     const V mx = lx - s * r.dx, my = ly - s * r.dy, mz = lz - s * r.dz;
-    const V m2 = mx * mx + my * my + mz * mz;                                              // §6: m2 = |l − s·Rd|²
+    const V m2 = mx * mx + my * my + mz * mz; // §6: m2 = |l − s·Rd|²
+    const auto outside = l2 > r2;
+    const auto ahead = !((s < T(0)) & outside); // §6: not behind an origin outside
+    auto hit = (a > T(0)) & (a < inf) & ahead & (m2 <= r2);
+    if (lane_bits(hit) == 0) return 0;
     const V q = lane_sqrt((r2 - m2) * inv_a);                                              // §6: q = √(r2 − m2)
     const V c = (l2 - r2) * inv_a;                                                         // t_near · t_far
     const auto on_surface = lane_abs(l2 - r2) <= band0 + rounding_gamma<T>(6) * (l2 + r2); // surface_band
-    const auto outside = l2 > r2;
-    const V inside_t = select(s >= T(0), s + q, c / (s - q));                      // §6: t = s + q
-    const V t = select(on_surface, s + q, select(outside, c / (s + q), inside_t)); // §6, §8 fix
-    const auto ahead = !((s < T(0)) & outside);                                    // §6: not behind an origin outside
+    const V inside_t = select(s >= T(0), s + q, c / (s - q));                              // §6: t = s + q
+    const V t = select(on_surface, s + q, select(outside, c / (s + q), inside_t));         // §6, §8 fix
     const auto not_leaving = (s > T(0)) | !on_surface; // §8 fix: from the surface, only inwards
-    const auto hit = (a > T(0)) & (a < inf) & ahead & (m2 <= r2) & not_leaving & (t > T(0)) & (t < inf);
-    R::store(select(hit, t, V(inf)), out.t + k);
-    R::store(V(T(0)), out.u + k);
-    R::store(V(T(0)), out.v + k);
-    return lane_bits(hit) << k;
+    hit = hit & not_leaving & (t > T(0)) & (t < inf);
+    R::store(t, t_out), R::store(V(T(0)), u_out), R::store(V(T(0)), v_out);
+    return lane_bits(hit);
+}
+
+/// The exact test of a register of rays on a triangle (Möller–Trumbore, without culling) or a
+/// sphere (§6): the lanes hit, their t, u, v stored at t, u, v.
+template <class T>
+std::uint64_t hit_register(const RayRegister<T>& r, const Triangle<T>& tri, T* t, T* u, T* v) noexcept {
+    return moller_trumbore_register(r, tri.v0, tri.v1 - tri.v0, tri.v2 - tri.v0, t, u, v);
+}
+template <class T>
+std::uint64_t hit_register(const RayRegister<T>& r, const Sphere<T>& sp, T* t, T* u, T* v) noexcept {
+    if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return 0;
+    const T e = T(1.7320508075688772) * surface_point_error(sp); // surface_band's √3·e
+    return sphere_register(r, sp, e * (T(2) * sp.radius + e), t, u, v);
 }
 } // namespace detail
 
-/// The hits of every ray of `lanes` on `tri` by Möller–Trumbore without culling (bit k: ray k
-/// hits, at out.t[k] with out.u[k], out.v[k]): intersect_moller_trumbore's decisions and
-/// quantities, a register of rays at a time. The Scene tests its triangles this way for one
-/// ray as for a stream, so that both give the same bits whatever the compiler fuses.
-template <class T>
-std::uint64_t hit_lanes(const RayLanes<T>& lanes, const Triangle<T>& tri, RayLaneHits<T>& out) noexcept {
-    const Vertex<T> e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
-    if (detail::is_degenerate(e1, e2, cross(e1, e2))) return 0; // MT never hits it
+/// The hits of every ray of `lanes` on `shape` (bit k: ray k hits, at out.t[k] with out.u[k],
+/// out.v[k]; nothing is said of the lanes missed), for triangles by Möller–Trumbore without
+/// culling and spheres by §6: intersect_moller_trumbore's and intersect's decisions and
+/// quantities, a register of rays at a time. The Scene tests its objects this way for one ray
+/// (broadcast to a register) as for a stream, so that both give the same bits whatever the
+/// compiler fuses.
+template <class T, class Shape>
+auto hit_lanes(const RayLanes<T>& lanes, const Shape& shape, RayLaneHits<T>& out) noexcept
+    -> decltype(detail::hit_register(std::declval<const detail::RayRegister<T>&>(), shape, out.t, out.u, out.v)) {
     std::uint64_t hits = 0;
     for (std::size_t k = 0; k < lanes.padded; k += detail::LaneRegister<T>::width)
-        hits |= detail::moller_trumbore_register(lanes, k, tri.v0, e1, e2, out);
-    return lanes.count == RayLanes<T>::capacity ? hits : hits & ((std::uint64_t(1) << lanes.count) - 1);
-}
-
-/// The hits of every ray of `lanes` on `sp` by the §6 test (intersect(ray, sphere)), as
-/// hit_lanes for triangles.
-template <class T>
-std::uint64_t hit_lanes(const RayLanes<T>& lanes, const Sphere<T>& sp, RayLaneHits<T>& out) noexcept {
-    if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return 0;
-    const T e = T(1.7320508075688772) * surface_point_error(sp); // surface_band's √3·e
-    const T band0 = e * (T(2) * sp.radius + e);
-    std::uint64_t hits = 0;
-    for (std::size_t k = 0; k < lanes.padded; k += detail::LaneRegister<T>::width)
-        hits |= detail::sphere_register(lanes, k, sp, band0, out);
+        hits |= detail::hit_register(detail::RayRegister<T>(lanes, k), shape, out.t + k, out.u + k, out.v + k) << k;
     return lanes.count == RayLanes<T>::capacity ? hits : hits & ((std::uint64_t(1) << lanes.count) - 1);
 }
 

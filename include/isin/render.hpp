@@ -182,6 +182,14 @@ struct LightLanes : LaneRegister<T> {
         // clang-format on
         for (std::size_t f = 0; f < fields; ++f) lanes[f * stride + k] = values[f];
     }
+    // Every lane of a one-register set (stride = width) holds shaded point s, each field stored
+    // whole (the passes' loads of a register then take what one store wrote).
+    static void set_all(T* lanes, const Shading<T>& s) noexcept {
+        T one[fields];
+        set(one, 1, 0, s);
+        for (std::size_t f = 0; f < fields; ++f)
+            LightLanes::store(typename LightLanes::V(one[f]), lanes + f * LaneRegister<T>::width);
+    }
     // Lane k holds nothing: zeros, which no light lights (N·L = 0).
     static void clear(T* lanes, std::size_t stride, std::size_t k) noexcept {
         for (std::size_t f = 0; f < rows; ++f) lanes[f * stride + k] = T(0);
@@ -259,22 +267,23 @@ template <class T, template <class> class... S>
     const Hit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
     if (!sh) return scene.background;
     detail::Shading<T> s = detail::begin_shading(scene, ray, sh);
-    // The lights one at a time, in lane 0 of one register (the renderer's streams fill them all).
+    // The lights one at a time, the point in every lane of one register (the renderer's streams
+    // hold a point per lane), lane 0 read.
     using Lanes = detail::LightLanes<T>;
     constexpr std::size_t W = Lanes::width;
     alignas(64) T lanes[Lanes::rows * W];
-    for (std::size_t k = 0; k < W; ++k) Lanes::clear(lanes, W, k);
-    Lanes::set(lanes, W, 0, s);
+    Lanes::set_all(lanes, s);
     const T& n_dot_l = lanes[Lanes::field(0, Lanes::n_dot_l) * W];
-    T& visible = lanes[Lanes::field(0, Lanes::visible) * W];
+    T* const visible = lanes + Lanes::field(0, Lanes::visible) * W;
     for (const PointLight<T>& light : scene.lights) {
         detail::light_direction_pass(lanes, W, 0, light.position);
         if (!(n_dot_l > T(0))) continue; // §7: facing away → unlit, no shadow ray needed
-        visible = T(1);
+        T through = T(1);
         if (opt.shadows) { // §9: a ray towards the light; anything nearer than the light shadows
             ++stats.shadow;
-            visible = scene.transmittance(Ray<T>{s.shadow_from, light.position - s.shadow_from}, T(1));
+            through = scene.transmittance(Ray<T>{s.shadow_from, light.position - s.shadow_from}, T(1));
         }
+        Lanes::store(typename Lanes::V(through), visible);
         detail::light_term_pass(lanes, W, 0, light.color);
     }
     s.local = Lanes::local(lanes, W, 0);

@@ -166,27 +166,33 @@ template <class T>
     return may_hit(lanes, tri.triangle);
 }
 
-/// The exact test of every ray of a block on the primitive (ray_lanes.hpp), for the built-in
-/// kinds: where the Scene tests a kind's objects one after another, it tests them this way for
-/// one ray (lane 0) and for the rays of a stream, so that both give the same bits.
+namespace detail {
+// The shape the exact test in lanes (hit_lanes, ray_lanes.hpp) takes for a primitive: textured
+// triangles as their triangle.
 template <class T>
-inline std::uint64_t hit_lanes(const RayLanes<T>& lanes, const TexturedTriangle<T>& tri, RayLaneHits<T>& out) noexcept {
-    return hit_lanes(lanes, tri.triangle, out);
+const Triangle<T>& lane_shape(const TexturedTriangle<T>& tri) noexcept {
+    return tri.triangle;
+}
+template <class Shape>
+const Shape& lane_shape(const Shape& shape) noexcept {
+    return shape;
 }
 
-namespace detail {
 template <class T, class Shape, class = void>
 struct has_lane_filter : std::false_type {};
 template <class T, class Shape>
 struct has_lane_filter<T, Shape,
                        std::void_t<decltype(may_hit(std::declval<const RayLanes<T>&>(), std::declval<const Shape&>()))>>
     : std::true_type {};
+// Whether the built-in kinds' exact test in lanes (ray_lanes.hpp) tests kind Shape.
 template <class T, class Shape, class = void>
 struct has_lane_hits : std::false_type {};
 template <class T, class Shape>
-struct has_lane_hits<T, Shape,
-                     std::void_t<decltype(hit_lanes(std::declval<const RayLanes<T>&>(), std::declval<const Shape&>(),
-                                                    std::declval<RayLaneHits<T>&>()))>> : std::true_type {};
+struct has_lane_hits<
+    T, Shape,
+    std::void_t<decltype(hit_register(std::declval<const RayRegister<T>&>(), lane_shape(std::declval<const Shape&>()),
+                                      std::declval<T*>(), std::declval<T*>(), std::declval<T*>()))>> : std::true_type {
+};
 } // namespace detail
 
 /// Whether a primitive kind is a triangle: a Bvh of it tests blocks of 8 with the watertight
@@ -748,18 +754,18 @@ private:
     }
 
     // One ray's tests of single objects: hit(shape) is the ray's hit on it (or a miss), through
-    // hit_lanes with the ray in lane 0 where the kind has it (exact_in_lanes), as the stream calls
-    // test the rays of a stream, else intersect_primitive.
+    // the exact test in lanes with the ray in every lane of a register where the kind has it
+    // (exact_in_lanes), the passes the stream calls run on the rays of a stream, else
+    // intersect_primitive.
     class OneRay {
     public:
-        OneRay(const Scene& scene, const Ray<T>& ray) noexcept : scene_(scene), ray_(ray) {}
+        OneRay(const Scene& scene, const Ray<T>& ray) noexcept : scene_(scene), ray_(ray), lanes_(ray) {}
         template <class Shape>
         Hit<T> hit(const Shape& shape) {
             if constexpr (detail::has_lane_hits<T, Shape>::value) {
                 if (scene_.exact_in_lanes<Shape>()) {
-                    if (!lanes_set_) lanes_.assign(&ray_, 1), lanes_set_ = true;
-                    if (!hit_lanes(lanes_, shape, found_)) return Hit<T>::miss();
-                    return Hit<T>::at(found_.t[0], found_.u[0], found_.v[0]);
+                    if (!detail::hit_register(lanes_, detail::lane_shape(shape), t_, u_, v_)) return Hit<T>::miss();
+                    return Hit<T>::at(t_[0], u_[0], v_[0]);
                 }
             }
             return intersect_primitive(ray_, shape, scene_.triangle_method);
@@ -768,9 +774,9 @@ private:
     private:
         const Scene& scene_;
         const Ray<T>& ray_;
-        bool lanes_set_ = false;
-        RayLanes<T> lanes_;
-        RayLaneHits<T> found_;
+        detail::RayRegister<T> lanes_;
+        alignas(64) T t_[detail::LaneRegister<T>::width], u_[detail::LaneRegister<T>::width],
+            v_[detail::LaneRegister<T>::width];
     };
 
     // Calls f(i, hit) for the objects of `vec` in order (but those `skip` names), with the hit of
@@ -864,7 +870,8 @@ private:
                        RayLaneHits<T>& exact, F&& f) const {
         if constexpr (detail::has_lane_hits<T, Shape>::value) {
             if (exact_in_lanes<Shape>()) {
-                for (std::uint64_t hit = hit_lanes(lanes, shape, exact) & open; hit; hit &= hit - 1) {
+                for (std::uint64_t hit = hit_lanes(lanes, detail::lane_shape(shape), exact) & open; hit;
+                     hit &= hit - 1) {
                     const int k = detail::lowest_bit(hit);
                     f(k, Hit<T>::at(exact.t[k], exact.u[k], exact.v[k]));
                 }
