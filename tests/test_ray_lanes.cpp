@@ -196,13 +196,13 @@ struct Agreement {
 /// Runs hit_lanes on `rays` in blocks (the last partial) and compares each ray's verdict, t, u, v
 /// with `scalar(ray)`: bit for bit (same_bits), a different hit or miss (other_decision), or both
 /// hits with t more than `tolerance`·t apart, or u or v more than `tolerance` (far_off). Also tests each ray
-/// alone in lane 0 (as the Scene's single-ray calls do): a result other than its lane's in the
-/// block is `moved`.
+/// alone, one value per coordinate (detail::hit_register on a RayRegister<T, T>, as the Scene's
+/// single-ray calls do): a result other than its lane's in the block is `moved`.
 template <class T, class Shape, class Scalar>
 void agree(const std::vector<isin::Ray<T>>& rays, const Shape& shape, const Scalar& scalar, T tolerance,
            Agreement& out) {
-    isin::RayLanes<T> lanes, alone;
-    isin::RayLaneHits<T> found, single;
+    isin::RayLanes<T> lanes;
+    isin::RayLaneHits<T> found;
     for (std::size_t first = 0; first < rays.size(); first += isin::RayLanes<T>::capacity) {
         const std::size_t n = std::min(isin::RayLanes<T>::capacity, rays.size() - first);
         lanes.assign(rays.data() + first, n);
@@ -212,11 +212,12 @@ void agree(const std::vector<isin::Ray<T>>& rays, const Shape& shape, const Scal
             const isin::Ray<T>& ray = rays[first + k];
             const bool lane_hit = (hit >> k) & 1u;
             const isin::Hit<T> h = scalar(ray);
-            alone.assign(&ray, 1);
-            const bool alone_hit = isin::hit_lanes(alone, shape, single) & 1u;
-            out.moved += alone_hit != lane_hit || (lane_hit && (std::memcmp(&single.t[0], &found.t[k], sizeof(T)) ||
-                                                                std::memcmp(&single.u[0], &found.u[k], sizeof(T)) ||
-                                                                std::memcmp(&single.v[0], &found.v[k], sizeof(T))));
+            T t1 = T(0), u1 = T(0), v1 = T(0);
+            const bool alone_hit =
+                isin::detail::hit_register(isin::detail::RayRegister<T, T>(ray), shape, &t1, &u1, &v1);
+            out.moved += alone_hit != lane_hit || (lane_hit && (std::memcmp(&t1, &found.t[k], sizeof(T)) ||
+                                                                std::memcmp(&u1, &found.u[k], sizeof(T)) ||
+                                                                std::memcmp(&v1, &found.v[k], sizeof(T))));
             out.rays += 1, out.hits += bool(h);
             if (lane_hit != bool(h)) {
                 ++out.other_decision;

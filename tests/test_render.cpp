@@ -616,14 +616,13 @@ TEST_CASE_TEMPLATE("§7 the lights' terms in lanes: phong_light's value for each
         CHECK(std::fabs(got.r - expected.r) <= tolerance);
         CHECK(std::fabs(got.g - expected.g) <= tolerance);
         CHECK(std::fabs(got.b - expected.b) <= tolerance);
-        // The same point alone in lane 0 of one register, as trace() computes it: the same bits.
-        alignas(64) T one[Lanes::rows * W];
-        for (std::size_t k = 0; k < W; ++k) Lanes::clear(one, W, k);
-        Lanes::set(one, W, 0, s);
-        isin::detail::light_direction_pass(one, W, 0, light.position);
-        one[Lanes::field(0, Lanes::visible) * W] = visible[i];
-        isin::detail::light_term_pass(one, W, 0, light.color);
-        const isin::Color<T> alone = Lanes::local(one, W, 0);
+        // The same point alone, one value per field, as trace() computes it: the same bits.
+        T one[Lanes::rows];
+        Lanes::set(one, 1, 0, s);
+        isin::detail::light_direction_pass<T, T>(one, 1, 0, light.position);
+        one[Lanes::field(0, Lanes::visible)] = visible[i];
+        isin::detail::light_term_pass<T, T>(one, 1, 0, light.color);
+        const isin::Color<T> alone = Lanes::local(one, 1, 0);
         same_bits += std::memcmp(&alone, &got, sizeof got) == 0;
     }
     CHECK(same_bits == int(N));

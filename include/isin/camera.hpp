@@ -7,7 +7,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "detail/attributes.hpp"
 #include "detail/lane_pack.hpp"
 #include "ray.hpp"
 #include "vec.hpp"
@@ -140,62 +139,51 @@ public:
     /// The image-plane point GD of pixel (x, y) (§3): (16·x/(W−1) − 8, 4.5 − 9·y/(H−1), 10) in
     /// the camera's frame, moved to world space by the pose. Fractional x, y address sub-pixels.
     [[nodiscard]] Vertex<T> image_point(T x, T y) const noexcept {
-        Lanes lanes(x, y);
-        rays_pass(lanes);
-        return {lanes.out[0][0], lanes.out[1][0], lanes.out[2][0]};
+        T out[6];
+        rays_pass(x, y, out);
+        return {out[0], out[1], out[2]};
     }
 
     /// The primary ray through pixel (x, y) (§3): Ro = eye, Rd = normalize(GD − eye).
     [[nodiscard]] Ray<T> primary_ray(T x, T y) const noexcept {
-        Lanes lanes(x, y);
-        rays_pass(lanes);
-        return {position_, {lanes.out[3][0], lanes.out[4][0], lanes.out[5][0]}};
+        T out[6];
+        rays_pass(x, y, out);
+        return {position_, {out[3], out[4], out[5]}};
     }
 
     /// The primary rays through the points (x[k], y[k]) of the image, k < n: out[k] =
     /// primary_ray(x[k], y[k]), the same bits, computed a register of lanes at a time.
     void primary_rays(const T* x, const T* y, std::size_t n, Ray<T>* out) const noexcept {
-        constexpr std::size_t W = detail::LaneRegister<T>::width;
+        using R = detail::LaneRegister<T>;
+        constexpr std::size_t W = R::width;
         for (std::size_t first = 0; first < n; first += W) {
             const std::size_t m = std::min(W, n - first);
-            Lanes lanes(T(0), T(0));
-            for (std::size_t k = 0; k < m; ++k) lanes.x[k] = x[first + k], lanes.y[k] = y[first + k];
-            rays_pass(lanes);
-            for (std::size_t k = 0; k < m; ++k)
-                out[first + k] = {position_, {lanes.out[3][k], lanes.out[4][k], lanes.out[5][k]}};
+            alignas(64) T xs[W] = {}, ys[W] = {}, lanes[6][W];
+            for (std::size_t k = 0; k < m; ++k) xs[k] = x[first + k], ys[k] = y[first + k];
+            typename R::V v[6] = {T(0), T(0), T(0), T(0), T(0), T(0)};
+            rays_pass(R::load(xs), R::load(ys), v);
+            for (std::size_t c = 0; c < 6; ++c) R::store(v[c], lanes[c]);
+            for (std::size_t k = 0; k < m; ++k) out[first + k] = {position_, {lanes[3][k], lanes[4][k], lanes[5][k]}};
         }
     }
 
 private:
-    // A register of lanes of image points (x, y) (unused lanes hold the first's) and what rays_pass
-    // makes of them: GD's x, y, z and the unit direction's.
-    struct Lanes {
-        static constexpr std::size_t width = detail::LaneRegister<T>::width;
-        alignas(64) T x[width], y[width];
-        alignas(64) T out[6][width];
-        Lanes(T x0, T y0) noexcept { // stored whole: rays_pass's loads then take what one store wrote
-            detail::LaneRegister<T>::store(typename detail::LaneRegister<T>::V(x0), x);
-            detail::LaneRegister<T>::store(typename detail::LaneRegister<T>::V(y0), y);
-        }
-    };
-    // §3 for a register of lanes: the image-plane points GD of (x, y) and the unit directions
-    // from the eye towards them. Compiled once, so that image_point, primary_ray and primary_rays
-    // give the same bits whichever lane a point takes.
-    ISIN_DETAIL_NOINLINE void rays_pass(Lanes& lanes) const noexcept {
-        using R = detail::LaneRegister<T>;
-        using V = typename R::V;
-        const V x = R::load(lanes.x), y = R::load(lanes.y);
+    // §3 for one image point (V = T) or a register of them (V = LaneRegister's): the image-plane
+    // point GD of (x, y) into out[0 … 2] and the unit direction from the eye towards it into
+    // out[3 … 5]. Each product it adds goes through lane_fma, so that image_point, primary_ray
+    // and primary_rays give the same bits.
+    template <class V>
+    void rays_pass(V x, V y, V* out) const noexcept {
+        using detail::lane_fma;
         const V gx = V(plane_width) * x / V(T(width_ - 1)) - V(plane_width / T(2));    // §3: 16·x/(W−1) − 8
         const V gy = V(plane_height / T(2)) - V(plane_height) * y / V(T(height_ - 1)); // §3: 4.5 − 9·y/(H−1)
-        const Vertex<T> ahead = plane_distance * forward_;
         // §3: GD = eye + gx·right + gy·up + 10·forward (z = 10 for the note's camera)
-        const V px = V(position_.x) + gx * V(right_.x) + gy * V(up_.x) + V(ahead.x);
-        const V py = V(position_.y) + gx * V(right_.y) + gy * V(up_.y) + V(ahead.y);
-        const V pz = V(position_.z) + gx * V(right_.z) + gy * V(up_.z) + V(ahead.z);
-        V dx = px - V(position_.x), dy = py - V(position_.y), dz = pz - V(position_.z);
-        detail::lane_normalize<T>(dx, dy, dz); // §3: Rd = (GD − eye)/|GD − eye|
-        R::store(px, lanes.out[0]), R::store(py, lanes.out[1]), R::store(pz, lanes.out[2]);
-        R::store(dx, lanes.out[3]), R::store(dy, lanes.out[4]), R::store(dz, lanes.out[5]);
+        const V d(plane_distance);
+        out[0] = lane_fma(d, V(forward_.x), lane_fma(gy, V(up_.x), lane_fma(gx, V(right_.x), V(position_.x))));
+        out[1] = lane_fma(d, V(forward_.y), lane_fma(gy, V(up_.y), lane_fma(gx, V(right_.y), V(position_.y))));
+        out[2] = lane_fma(d, V(forward_.z), lane_fma(gy, V(up_.z), lane_fma(gx, V(right_.z), V(position_.z))));
+        out[3] = out[0] - V(position_.x), out[4] = out[1] - V(position_.y), out[5] = out[2] - V(position_.z);
+        detail::lane_normalize<T>(out[3], out[4], out[5]); // §3: Rd = (GD − eye)/|GD − eye|
     }
 
     static int checked_side(int side, const char* what) {

@@ -199,96 +199,95 @@ struct RayLaneHits {
 };
 
 namespace detail {
-/// A register of rays: lanes k … k + width of a RayLanes block, or one ray in every lane.
-template <class T>
+/// A register of rays (V = LaneRegister's): lanes k … k + width of a RayLanes block, or one ray
+/// in every lane; or one ray (V = T).
+template <class T, class V = typename LaneRegister<T>::V>
 struct RayRegister {
-    using R = LaneRegister<T>;
-    using V = typename R::V;
     V ox, oy, oz, dx, dy, dz;
     RayRegister(const RayLanes<T>& lanes, std::size_t k) noexcept
-        : ox(R::load(lanes.ox + k)), oy(R::load(lanes.oy + k)), oz(R::load(lanes.oz + k)), dx(R::load(lanes.dx + k)),
-          dy(R::load(lanes.dy + k)), dz(R::load(lanes.dz + k)) {}
+        : ox(load(lanes.ox + k)), oy(load(lanes.oy + k)), oz(load(lanes.oz + k)), dx(load(lanes.dx + k)),
+          dy(load(lanes.dy + k)), dz(load(lanes.dz + k)) {}
     explicit RayRegister(const Ray<T>& ray) noexcept
         : ox(ray.origin.x), oy(ray.origin.y), oz(ray.origin.z), dx(ray.direction.x), dy(ray.direction.y),
           dz(ray.direction.z) {}
+
+private:
+    static V load(const T* p) noexcept { return load_lanes<T, V>(p); }
 };
 
-/// Möller–Trumbore (note §10) for a register of rays, exactly as intersect_moller_trumbore
-/// decides and computes, without culling, for a triangle with edges e1, e2 from v0 (a degenerate
-/// one, checked as there on the hit path only, is never hit). Returns the lanes hit (bit 0 for the register's first),
-/// and stores their t, u, v (the other lanes' are unspecified); a register that misses whole
-/// leaves early. Compiled once: one ray and a block's registers get the same instructions.
-template <class T>
-ISIN_DETAIL_NOINLINE std::uint64_t moller_trumbore_register(const RayRegister<T>& r, const Vertex<T>& v0,
-                                                            const Vertex<T>& e1, const Vertex<T>& e2, T* t_out,
-                                                            T* u_out, T* v_out) noexcept {
-    using R = LaneRegister<T>;
-    using V = typename R::V;
-    const V px = r.dy * e2.z - r.dz * e2.y; // MT: P = Rd × E2
-    const V py = r.dz * e2.x - r.dx * e2.z;
-    const V pz = r.dx * e2.y - r.dy * e2.x;
-    const V det = e1.x * px + e1.y * py + e1.z * pz; // MT: det = E1·P
+/// Möller–Trumbore (note §10) for a register of rays or one ray, deciding and computing as
+/// intersect_moller_trumbore (rounding each a·b + c as lane_fma does), without culling, for a
+/// triangle with edges e1, e2 from v0 (a degenerate one, checked as there on the hit path only,
+/// is never hit). Returns the lanes hit (bit 0 for the first) and stores their t, u, v (the
+/// other lanes' are unspecified); leaves early when no lane can hit. Every product it adds
+/// goes through lane_fma, so one ray and a register of rays get the same bits.
+template <class T, class V>
+std::uint64_t moller_trumbore_register(const RayRegister<T, V>& r, const Vertex<T>& v0, const Vertex<T>& e1,
+                                       const Vertex<T>& e2, T* t_out, T* u_out, T* v_out) noexcept {
+    const V ex(e2.x), ey(e2.y), ez(e2.z);
+    const V px = lane_cross_term(r.dy, ez, r.dz, ey); // MT: P = Rd × E2
+    const V py = lane_cross_term(r.dz, ex, r.dx, ez);
+    const V pz = lane_cross_term(r.dx, ey, r.dy, ex);
+    const V det = lane_dot(V(e1.x), V(e1.y), V(e1.z), px, py, pz); // MT: det = E1·P
     const V sign = select(det < T(0), V(T(-1)), V(T(1)));
     const V abs_det = det * sign;
-    const V sx = r.ox - v0.x, sy = r.oy - v0.y, sz = r.oz - v0.z; // MT: S = Ro − V0
-    const V U = (sx * px + sy * py + sz * pz) * sign;             // MT: u = S·P / det
+    const V sx = r.ox - V(v0.x), sy = r.oy - V(v0.y), sz = r.oz - V(v0.z); // MT: S = Ro − V0
+    const V U = lane_dot(sx, sy, sz, px, py, pz) * sign;                   // MT: u = S·P / det
     auto hit = (det != T(0)) & (U >= T(0)) & (U <= abs_det);
     if (lane_bits(hit) == 0) return 0;
-    const V qx = sy * e1.z - sz * e1.y; // MT: Q = S × E1
-    const V qy = sz * e1.x - sx * e1.z;
-    const V qz = sx * e1.y - sy * e1.x;
-    const V Vd = (r.dx * qx + r.dy * qy + r.dz * qz) * sign; // MT: v = Rd·Q / det
-    const V tt = (e2.x * qx + e2.y * qy + e2.z * qz) * sign; // MT: t = E2·Q / det
+    const V qx = lane_cross_term(sy, V(e1.z), sz, V(e1.y)); // MT: Q = S × E1
+    const V qy = lane_cross_term(sz, V(e1.x), sx, V(e1.z));
+    const V qz = lane_cross_term(sx, V(e1.y), sy, V(e1.x));
+    const V Vd = lane_dot(r.dx, r.dy, r.dz, qx, qy, qz) * sign; // MT: v = Rd·Q / det
+    const V tt = lane_dot(ex, ey, ez, qx, qy, qz) * sign;       // MT: t = E2·Q / det
     hit = hit & (Vd >= T(0)) & (U + Vd <= abs_det) & (tt > T(0));
     if (lane_bits(hit) == 0 || is_degenerate(e1, e2, cross(e1, e2))) return 0;
     const V inv_det = T(1) / abs_det;
     const V t = tt * inv_det;
     hit = hit & (t > T(0)) & (t < std::numeric_limits<T>::infinity());
-    R::store(t, t_out), R::store(U * inv_det, u_out), R::store(Vd * inv_det, v_out);
+    store_lanes(t, t_out), store_lanes(U * inv_det, u_out), store_lanes(Vd * inv_det, v_out);
     return lane_bits(hit);
 }
 
-/// The §6 sphere test for a register of rays, exactly as intersect(ray, sphere) decides and
-/// computes, for a sphere of finite positive radius (the caller checks); `band0` is
-/// surface_band's part that does not depend on the ray. As moller_trumbore_register: the lanes
-/// hit, their t (u = v = 0) stored.
-template <class T>
-ISIN_DETAIL_NOINLINE std::uint64_t sphere_register(const RayRegister<T>& r, const Sphere<T>& sp, T band0, T* t_out,
-                                                   T* u_out, T* v_out) noexcept {
-    using R = LaneRegister<T>;
-    using V = typename R::V;
+/// The §6 sphere test for a register of rays or one ray, deciding and computing as
+/// intersect(ray, sphere) (rounding as lane_fma does), for a sphere of finite positive radius
+/// (the caller checks); `band0` is surface_band's part that does not depend on the ray. As
+/// moller_trumbore_register: the lanes hit, their t (u = v = 0) stored.
+template <class T, class V>
+std::uint64_t sphere_register(const RayRegister<T, V>& r, const Sphere<T>& sp, T band0, T* t_out, T* u_out,
+                              T* v_out) noexcept {
     constexpr T inf = std::numeric_limits<T>::infinity();
-    const V a = r.dx * r.dx + r.dy * r.dy + r.dz * r.dz;
-    const V inv_a = T(1) / a;                                                          // 1 for the note's unit Rd
-    const V lx = sp.center.x - r.ox, ly = sp.center.y - r.oy, lz = sp.center.z - r.oz; // §6: l = C − Ro
-    const V s = (lx * r.dx + ly * r.dy + lz * r.dz) * inv_a;                           // §6: s = l·Rd
-    const V l2 = lx * lx + ly * ly + lz * lz;                                          // §6: l2 = l·l
-    const T r2 = sp.radius * sp.radius;                                                // §6: r2 = r²
-    const V mx = lx - s * r.dx, my = ly - s * r.dy, mz = lz - s * r.dz;
-    const V m2 = mx * mx + my * my + mz * mz; // §6: m2 = |l − s·Rd|²
+    const V a = lane_dot(r.dx, r.dy, r.dz, r.dx, r.dy, r.dz);
+    const V inv_a = T(1) / a; // 1 for the note's unit Rd
+    const V lx = V(sp.center.x) - r.ox, ly = V(sp.center.y) - r.oy, lz = V(sp.center.z) - r.oz; // §6: l = C − Ro
+    const V s = lane_dot(lx, ly, lz, r.dx, r.dy, r.dz) * inv_a;                                 // §6: s = l·Rd
+    const V l2 = lane_dot(lx, ly, lz, lx, ly, lz);                                              // §6: l2 = l·l
+    const T r2 = sp.radius * sp.radius;                                                         // §6: r2 = r²
+    const V mx = lane_fma(-s, r.dx, lx), my = lane_fma(-s, r.dy, ly), mz = lane_fma(-s, r.dz, lz);
+    const V m2 = lane_dot(mx, my, mz, mx, my, mz); // §6: m2 = |l − s·Rd|²
     const auto outside = l2 > r2;
     const auto ahead = !((s < T(0)) & outside); // §6: not behind an origin outside
     auto hit = (a > T(0)) & (a < inf) & ahead & (m2 <= r2);
     if (lane_bits(hit) == 0) return 0;
-    const V q = lane_sqrt((r2 - m2) * inv_a);                                              // §6: q = √(r2 − m2)
-    const V c = (l2 - r2) * inv_a;                                                         // t_near · t_far
-    const auto on_surface = lane_abs(l2 - r2) <= band0 + rounding_gamma<T>(6) * (l2 + r2); // surface_band
-    const V inside_t = select(s >= T(0), s + q, c / (s - q));                              // §6: t = s + q
-    const V t = select(on_surface, s + q, select(outside, c / (s + q), inside_t));         // §6, §8 fix
+    const V q = lane_sqrt((V(r2) - m2) * inv_a); // §6: q = √(r2 − m2)
+    const V c = (l2 - V(r2)) * inv_a;            // t_near · t_far
+    const auto on_surface = lane_abs(l2 - V(r2)) <= lane_fma(V(rounding_gamma<T>(6)), l2 + V(r2), V(band0));
+    const V inside_t = select(s >= T(0), s + q, c / (s - q));                      // §6: t = s + q
+    const V t = select(on_surface, s + q, select(outside, c / (s + q), inside_t)); // §6, §8 fix
     const auto not_leaving = (s > T(0)) | !on_surface; // §8 fix: from the surface, only inwards
     hit = hit & not_leaving & (t > T(0)) & (t < inf);
-    R::store(t, t_out), R::store(V(T(0)), u_out), R::store(V(T(0)), v_out);
+    store_lanes(t, t_out), store_lanes(V(T(0)), u_out), store_lanes(V(T(0)), v_out);
     return lane_bits(hit);
 }
 
-/// The exact test of a register of rays on a triangle (Möller–Trumbore, without culling) or a
-/// sphere (§6): the lanes hit, their t, u, v stored at t, u, v.
-template <class T>
-std::uint64_t hit_register(const RayRegister<T>& r, const Triangle<T>& tri, T* t, T* u, T* v) noexcept {
+/// The exact test of a register of rays (or of one ray) on a triangle (Möller–Trumbore, without
+/// culling) or a sphere (§6): the lanes hit, their t, u, v stored at t, u, v.
+template <class T, class V>
+std::uint64_t hit_register(const RayRegister<T, V>& r, const Triangle<T>& tri, T* t, T* u, T* v) noexcept {
     return moller_trumbore_register(r, tri.v0, tri.v1 - tri.v0, tri.v2 - tri.v0, t, u, v);
 }
-template <class T>
-std::uint64_t hit_register(const RayRegister<T>& r, const Sphere<T>& sp, T* t, T* u, T* v) noexcept {
+template <class T, class V>
+std::uint64_t hit_register(const RayRegister<T, V>& r, const Sphere<T>& sp, T* t, T* u, T* v) noexcept {
     if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return 0;
     const T e = T(1.7320508075688772) * surface_point_error(sp); // surface_band's √3·e
     return sphere_register(r, sp, e * (T(2) * sp.radius + e), t, u, v);

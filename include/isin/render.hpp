@@ -144,10 +144,9 @@ Shading<T> begin_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const H
 // The lights' Phong terms (§7) of shaded points, lane by lane. Lane k of field f is at
 // lanes[f·stride + k]: each point's position, shading normal, direction to the eye, material and
 // colour so far, and for each of up to `slots` lights at a time its direction L, N·L and the
-// fraction of it that gets through (what the shadow rays found). The passes take one register of
-// lanes (lane_pack.hpp; one lane where the target has none) and are compiled once: trace() (one
-// point) and the renderer's streams (up to stream_rays points) run the same instructions on each
-// lane, so a point gets the same colour bit for bit whatever its lane.
+// fraction of it that gets through (what the shadow rays found). The renderer's streams (up to
+// stream_rays points) run the passes a register of lanes at a time (lane_pack.hpp), trace() on
+// its one point; both round alike (lane_fma), so a point gets the same colour bit for bit.
 template <class T>
 struct LightLanes : LaneRegister<T> {
     // clang-format off
@@ -182,14 +181,6 @@ struct LightLanes : LaneRegister<T> {
         // clang-format on
         for (std::size_t f = 0; f < fields; ++f) lanes[f * stride + k] = values[f];
     }
-    // Every lane of a one-register set (stride = width) holds shaded point s, each field stored
-    // whole (the passes' loads of a register then take what one store wrote).
-    static void set_all(T* lanes, const Shading<T>& s) noexcept {
-        T one[fields];
-        set(one, 1, 0, s);
-        for (std::size_t f = 0; f < fields; ++f)
-            LightLanes::store(typename LightLanes::V(one[f]), lanes + f * LaneRegister<T>::width);
-    }
     // Lane k holds nothing: zeros, which no light lights (N·L = 0).
     static void clear(T* lanes, std::size_t stride, std::size_t k) noexcept {
         for (std::size_t f = 0; f < rows; ++f) lanes[f * stride + k] = T(0);
@@ -200,52 +191,53 @@ struct LightLanes : LaneRegister<T> {
     }
 };
 
-// §7 for the register of lanes at p: the unit direction L from each point to the light (as
-// normalize(): none, 0, where light − point has no length or is not finite) and N·L, into `slot`.
-template <class T>
+// §7 for the register of lanes at p (V = LaneRegister's) or the one point at p (V = T): the unit
+// direction L from each point to the light (as normalize(): none, 0, where light − point has no
+// length or is not finite) and N·L, into `slot`. Each product it adds goes through lane_fma,
+// so one point and a register of them get the same bits.
+template <class T, class V = typename LaneRegister<T>::V>
 ISIN_DETAIL_NOINLINE void light_direction_pass(T* p, std::size_t stride, std::size_t slot,
                                                const Vertex<T>& light) noexcept {
     using Lanes = LightLanes<T>;
-    using V = typename Lanes::V;
-    const auto at = [&](std::size_t f) { return Lanes::load(p + f * stride); };
+    const auto at = [&](std::size_t f) { return load_lanes<T, V>(p + f * stride); };
     V x = V(light.x) - at(Lanes::px), y = V(light.y) - at(Lanes::py), z = V(light.z) - at(Lanes::pz);
     lane_normalize<T>(x, y, z);
-    Lanes::store(x, p + Lanes::field(slot, Lanes::lx) * stride);
-    Lanes::store(y, p + Lanes::field(slot, Lanes::ly) * stride);
-    Lanes::store(z, p + Lanes::field(slot, Lanes::lz) * stride);
-    const V n_dot_l = at(Lanes::nx) * x + at(Lanes::ny) * y + at(Lanes::nz) * z; // §7: N·L
-    Lanes::store(n_dot_l, p + Lanes::field(slot, Lanes::n_dot_l) * stride);
+    store_lanes(x, p + Lanes::field(slot, Lanes::lx) * stride);
+    store_lanes(y, p + Lanes::field(slot, Lanes::ly) * stride);
+    store_lanes(z, p + Lanes::field(slot, Lanes::lz) * stride);
+    const V n_dot_l = lane_dot(at(Lanes::nx), at(Lanes::ny), at(Lanes::nz), x, y, z); // §7: N·L
+    store_lanes(n_dot_l, p + Lanes::field(slot, Lanes::n_dot_l) * stride);
 }
 
-// §7 for the register of lanes at p: where N·L > 0 and some of the light in `slot` gets through,
-// the local colour gains visible·(kd·(N·L)·object + ks·specular_power(Rf·V)·highlight)·light, Rf
-// the mirror of −L about N (phong_light's terms, in its order).
-template <class T>
+// §7 for the register of lanes (or the one point) at p: where N·L > 0 and some of the light in
+// `slot` gets through, the local colour gains visible·(kd·(N·L)·object +
+// ks·specular_power(Rf·V)·highlight)·light, Rf the mirror of −L about N (phong_light's terms, in
+// its order, each product added through lane_fma).
+template <class T, class V = typename LaneRegister<T>::V>
 ISIN_DETAIL_NOINLINE void light_term_pass(T* p, std::size_t stride, std::size_t slot, const Color<T>& light) noexcept {
     using Lanes = LightLanes<T>;
-    using V = typename Lanes::V;
-    constexpr std::size_t W = Lanes::width;
-    const auto at = [&](std::size_t f) { return Lanes::load(p + f * stride); };
+    constexpr std::size_t W = std::is_same_v<V, T> ? 1 : LaneRegister<T>::width;
+    const auto at = [&](std::size_t f) { return load_lanes<T, V>(p + f * stride); };
     const auto of_light = [&](typename Lanes::PerLight f) { return p + Lanes::field(slot, f) * stride; };
     const V nx = at(Lanes::nx), ny = at(Lanes::ny), nz = at(Lanes::nz);
-    const V lx = Lanes::load(of_light(Lanes::lx)), ly = Lanes::load(of_light(Lanes::ly)),
-            lz = Lanes::load(of_light(Lanes::lz));
-    const V n_dot_l = Lanes::load(of_light(Lanes::n_dot_l)), visible = Lanes::load(of_light(Lanes::visible));
+    const V lx = load_lanes<T, V>(of_light(Lanes::lx)), ly = load_lanes<T, V>(of_light(Lanes::ly)),
+            lz = load_lanes<T, V>(of_light(Lanes::lz));
+    const V n_dot_l = load_lanes<T, V>(of_light(Lanes::n_dot_l)), visible = load_lanes<T, V>(of_light(Lanes::visible));
     // §7: Rf = d − 2(d·N)N with d = −L, and its cosine with V
-    const V twice = T(2) * (-lx * nx + -ly * ny + -lz * nz);
-    const V rx = -lx - twice * nx, ry = -ly - twice * ny, rz = -lz - twice * nz;
+    const V twice = T(2) * lane_dot(-lx, -ly, -lz, nx, ny, nz);
+    const V rx = lane_fma(-twice, nx, -lx), ry = lane_fma(-twice, ny, -ly), rz = lane_fma(-twice, nz, -lz);
     alignas(64) T cosine[W], shine[W], spec[W];
-    Lanes::store(rx * at(Lanes::vx) + ry * at(Lanes::vy) + rz * at(Lanes::vz), cosine);
-    Lanes::store(at(Lanes::shininess), shine);
+    store_lanes(lane_dot(rx, ry, rz, at(Lanes::vx), at(Lanes::vy), at(Lanes::vz)), cosine);
+    store_lanes(at(Lanes::shininess), shine);
     const T* lit = of_light(Lanes::n_dot_l);
     const T* through = of_light(Lanes::visible);
     for (std::size_t k = 0; k < W; ++k) // cos^shininess lane by lane (std::pow), where the term counts
         spec[k] = lit[k] > T(0) && through[k] > T(0) ? specular_power(cosine[k], shine[k]) : T(0);
     const auto counts = (n_dot_l > T(0)) & (visible > T(0));
-    const V diffuse = at(Lanes::kd) * n_dot_l, specular = at(Lanes::ks) * Lanes::load(spec);
+    const V diffuse = at(Lanes::kd) * n_dot_l, specular = at(Lanes::ks) * load_lanes<T, V>(spec);
     const auto add = [&](std::size_t sum, std::size_t object, std::size_t highlight, T colour) {
-        const V term = visible * ((diffuse * at(object) + specular * at(highlight)) * V(colour));
-        Lanes::store(select(counts, at(sum) + term, at(sum)), p + sum * stride);
+        const V term = lane_fma(diffuse, at(object), specular * at(highlight)) * V(colour);
+        store_lanes(select(counts, lane_fma(visible, term, at(sum)), at(sum)), p + sum * stride);
     };
     add(Lanes::lr, Lanes::cr, Lanes::sr, light.r);
     add(Lanes::lg, Lanes::cg, Lanes::sg, light.g);
@@ -267,26 +259,24 @@ template <class T, template <class> class... S>
     const Hit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
     if (!sh) return scene.background;
     detail::Shading<T> s = detail::begin_shading(scene, ray, sh);
-    // The lights one at a time, the point in every lane of one register (the renderer's streams
-    // hold a point per lane), lane 0 read.
+    // The lights one at a time: the passes the renderer's streams run a register at a time, on
+    // one value (the same bits).
     using Lanes = detail::LightLanes<T>;
-    constexpr std::size_t W = Lanes::width;
-    alignas(64) T lanes[Lanes::rows * W];
-    Lanes::set_all(lanes, s);
-    const T& n_dot_l = lanes[Lanes::field(0, Lanes::n_dot_l) * W];
-    T* const visible = lanes + Lanes::field(0, Lanes::visible) * W;
+    T lanes[Lanes::rows];
+    Lanes::set(lanes, 1, 0, s);
+    const T& n_dot_l = lanes[Lanes::field(0, Lanes::n_dot_l)];
+    T& visible = lanes[Lanes::field(0, Lanes::visible)];
     for (const PointLight<T>& light : scene.lights) {
-        detail::light_direction_pass(lanes, W, 0, light.position);
+        detail::light_direction_pass<T, T>(lanes, 1, 0, light.position);
         if (!(n_dot_l > T(0))) continue; // §7: facing away → unlit, no shadow ray needed
-        T through = T(1);
+        visible = T(1);
         if (opt.shadows) { // §9: a ray towards the light; anything nearer than the light shadows
             ++stats.shadow;
-            through = scene.transmittance(Ray<T>{s.shadow_from, light.position - s.shadow_from}, T(1));
+            visible = scene.transmittance(Ray<T>{s.shadow_from, light.position - s.shadow_from}, T(1));
         }
-        Lanes::store(typename Lanes::V(through), visible);
-        detail::light_term_pass(lanes, W, 0, light.color);
+        detail::light_term_pass<T, T>(lanes, 1, 0, light.color);
     }
-    s.local = Lanes::local(lanes, W, 0);
+    s.local = Lanes::local(lanes, 1, 0);
     return detail::end_shading(scene, ray, s, depth, opt, stats);
 }
 

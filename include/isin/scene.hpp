@@ -188,11 +188,10 @@ struct has_lane_filter<T, Shape,
 template <class T, class Shape, class = void>
 struct has_lane_hits : std::false_type {};
 template <class T, class Shape>
-struct has_lane_hits<
-    T, Shape,
-    std::void_t<decltype(hit_register(std::declval<const RayRegister<T>&>(), lane_shape(std::declval<const Shape&>()),
-                                      std::declval<T*>(), std::declval<T*>(), std::declval<T*>()))>> : std::true_type {
-};
+struct has_lane_hits<T, Shape,
+                     std::void_t<decltype(hit_register(std::declval<const RayRegister<T, T>&>(),
+                                                       lane_shape(std::declval<const Shape&>()), std::declval<T*>(),
+                                                       std::declval<T*>(), std::declval<T*>()))>> : std::true_type {};
 } // namespace detail
 
 /// Whether a primitive kind is a triangle: a Bvh of it tests blocks of 8 with the watertight
@@ -759,13 +758,15 @@ private:
     // intersect_primitive.
     class OneRay {
     public:
-        OneRay(const Scene& scene, const Ray<T>& ray) noexcept : scene_(scene), ray_(ray), lanes_(ray) {}
+        OneRay(const Scene& scene, const Ray<T>& ray) noexcept : scene_(scene), ray_(ray), ray_register_(ray) {}
         template <class Shape>
         Hit<T> hit(const Shape& shape) {
             if constexpr (detail::has_lane_hits<T, Shape>::value) {
                 if (scene_.exact_in_lanes<Shape>()) {
-                    if (!detail::hit_register(lanes_, detail::lane_shape(shape), t_, u_, v_)) return Hit<T>::miss();
-                    return Hit<T>::at(t_[0], u_[0], v_[0]);
+                    T t, u, v;
+                    if (!detail::hit_register(ray_register_, detail::lane_shape(shape), &t, &u, &v))
+                        return Hit<T>::miss();
+                    return Hit<T>::at(t, u, v);
                 }
             }
             return intersect_primitive(ray_, shape, scene_.triangle_method);
@@ -774,9 +775,7 @@ private:
     private:
         const Scene& scene_;
         const Ray<T>& ray_;
-        detail::RayRegister<T> lanes_;
-        alignas(64) T t_[detail::LaneRegister<T>::width], u_[detail::LaneRegister<T>::width],
-            v_[detail::LaneRegister<T>::width];
+        detail::RayRegister<T, T> ray_register_; // one ray, one value per coordinate
     };
 
     // Calls f(i, hit) for the objects of `vec` in order (but those `skip` names), with the hit of

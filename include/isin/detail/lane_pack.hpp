@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #if (defined(__AVX512F__) || defined(__AVX__)) && !defined(ISIN_FORCE_PURE)
 #include <immintrin.h>
@@ -38,6 +39,17 @@ T negate_where(bool m, T x) noexcept {
 template <class T>
 T lane_sqrt(T x) noexcept {
     return std::sqrt(x);
+}
+/// a·b + c, rounded once where the target has fused multiply-add (FMA) and twice where it has
+/// not, for one value as for a register: a formula written with it for every product it adds
+/// gives the same bits in both forms, whatever the compiler would have fused on its own.
+template <class T>
+T lane_fma(T a, T b, T c) noexcept {
+#if defined(__FMA__)
+    return std::fma(a, b, c);
+#else
+    return a * b + c;
+#endif
 }
 template <class T>
 T select(bool m, T a, T b) noexcept {
@@ -83,6 +95,7 @@ struct Pack<float> {
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm512_abs_ps(a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(max16(a.v, b.v)); }
     friend Pack lane_sqrt(Pack a) noexcept { return Pack(sqrt16(a.v)); }
+    friend Pack lane_fma(Pack a, Pack b, Pack c) noexcept { return Pack(_mm512_fmadd_ps(a.v, b.v, c.v)); }
     friend Pack select(Mask m, Pack a, Pack b) noexcept { return Pack(_mm512_mask_blend_ps(__mmask16(m.m), b.v, a.v)); }
     friend Pack negate_where(Mask m, Pack a) noexcept {
         const __m512i x = _mm512_castps_si512(a.v);
@@ -114,6 +127,7 @@ struct Pack<double> {
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm512_abs_pd(a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(max8(a.v, b.v)); }
     friend Pack lane_sqrt(Pack a) noexcept { return Pack(sqrt8(a.v)); }
+    friend Pack lane_fma(Pack a, Pack b, Pack c) noexcept { return Pack(_mm512_fmadd_pd(a.v, b.v, c.v)); }
     friend Pack select(Mask m, Pack a, Pack b) noexcept { return Pack(_mm512_mask_blend_pd(__mmask8(m.m), b.v, a.v)); }
     friend Pack negate_where(Mask m, Pack a) noexcept {
         const __m512i x = _mm512_castpd_si512(a.v);
@@ -172,6 +186,11 @@ struct Pack<float> {
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm256_max_ps(a.v, b.v)); }
     friend Pack lane_sqrt(Pack a) noexcept { return Pack(_mm256_sqrt_ps(a.v)); }
+#if defined(__FMA__)
+    friend Pack lane_fma(Pack a, Pack b, Pack c) noexcept { return Pack(_mm256_fmadd_ps(a.v, b.v, c.v)); }
+#else
+    friend Pack lane_fma(Pack a, Pack b, Pack c) noexcept { return a * b + c; }
+#endif
     friend Pack select(Mask m, Pack a, Pack b) noexcept { return Pack(_mm256_blendv_ps(b.v, a.v, m.m)); }
     friend Pack negate_where(Mask m, Pack a) noexcept {
         return Pack(_mm256_xor_ps(a.v, _mm256_and_ps(m.m, _mm256_set1_ps(-0.0f))));
@@ -200,6 +219,11 @@ struct Pack<double> {
     friend Pack lane_abs(Pack a) noexcept { return Pack(_mm256_andnot_pd(_mm256_set1_pd(-0.0), a.v)); }
     friend Pack lane_max(Pack a, Pack b) noexcept { return Pack(_mm256_max_pd(a.v, b.v)); }
     friend Pack lane_sqrt(Pack a) noexcept { return Pack(_mm256_sqrt_pd(a.v)); }
+#if defined(__FMA__)
+    friend Pack lane_fma(Pack a, Pack b, Pack c) noexcept { return Pack(_mm256_fmadd_pd(a.v, b.v, c.v)); }
+#else
+    friend Pack lane_fma(Pack a, Pack b, Pack c) noexcept { return a * b + c; }
+#endif
     friend Pack select(Mask m, Pack a, Pack b) noexcept { return Pack(_mm256_blendv_pd(b.v, a.v, m.m)); }
     friend Pack negate_where(Mask m, Pack a) noexcept {
         return Pack(_mm256_xor_pd(a.v, _mm256_and_pd(m.m, _mm256_set1_pd(-0.0))));
@@ -209,6 +233,7 @@ struct Pack<double> {
 
 /// The lanes where a comparison of one value holds: bit 0.
 inline std::uint64_t lane_bits(bool m) noexcept { return m ? 1u : 0u; }
+inline std::uint64_t lane_bits(int m) noexcept { return m != 0 ? 1u : 0u; } // bool & bool
 #if defined(ISIN_DETAIL_LANE_PACKS)
 template <class M>
 std::uint64_t lane_bits(const M& m) noexcept {
@@ -233,11 +258,39 @@ struct LaneRegister {
 #endif
 };
 
+/// A value of T (V = T) or a register of lanes (V = LaneRegister's) at p, and back.
+template <class T, class V>
+V load_lanes(const T* p) noexcept {
+    if constexpr (std::is_same_v<V, T>)
+        return *p;
+    else
+        return LaneRegister<T>::load(p);
+}
+template <class T, class V>
+void store_lanes(const V& v, T* p) noexcept {
+    if constexpr (std::is_same_v<V, T>)
+        *p = v;
+    else
+        LaneRegister<T>::store(v, p);
+}
+
+/// x·y − z·w with the rounding lane_fma gives it.
+template <class V>
+V lane_cross_term(V x, V y, V z, V w) noexcept {
+    return lane_fma(x, y, -(z * w));
+}
+/// a·b of vectors in components, (ax·bx + ay·by) + az·bz as dot() (vec.hpp) sums it, each
+/// product added as lane_fma adds it.
+template <class V>
+V lane_dot(V ax, V ay, V az, V bx, V by, V bz) noexcept {
+    return lane_fma(az, bz, lane_fma(ay, by, ax * bx));
+}
+
 /// normalize() (vec.hpp, §2: R / |R|) of the vectors (x, y, z) of one value or a register of
-/// lanes: (0, 0, 0) where the length is 0 or not finite.
+/// lanes, with lane_dot's rounding: (0, 0, 0) where the length is 0 or not finite.
 template <class T, class V>
 void lane_normalize(V& x, V& y, V& z) noexcept {
-    const V len = lane_sqrt(x * x + y * y + z * z); // §2: |R|
+    const V len = lane_sqrt(lane_dot(x, y, z, x, y, z)); // §2: |R|
     const auto has_direction = (len > T(0)) & (len < std::numeric_limits<T>::infinity());
     x = select(has_direction, x / len, V(T(0)));
     y = select(has_direction, y / len, V(T(0)));
