@@ -4,11 +4,11 @@
 /// (AVX-512 or AVX, written once for one ray or a register: detail/lane_pack.hpp; one ray at a
 /// time elsewhere). Two kinds of test:
 /// - `hit_lanes`, for triangles (Möller–Trumbore) and spheres (§6): the exact test, each lane
-///   deciding and computing t, u, v with intersect_moller_trumbore's and intersect's operations.
-///   Where the compiler cannot fuse a·b + c the results are the scalar tests' bit for bit; where
-///   it can, it may fuse the two differently, so a Scene tests its objects this way for one ray
-///   (lane 0) as well as for a stream: its stream calls return the single-ray calls' hits bit for
-///   bit, the passes being compiled once.
+///   deciding and computing t, u, v with intersect_moller_trumbore's and intersect's operations,
+///   every product added through lane_fma (fused where the target has FMA, never where it has
+///   not). Without FMA the results are the scalar tests' bit for bit; with it, a compiler may fuse
+///   the scalar tests otherwise, so a Scene runs these kernels for one ray too, on plain values:
+///   its stream calls return the single-ray calls' hits bit for bit.
 /// - `may_hit`, a conservative filter for any primitive (a customisation point of user kinds):
 ///   whether the primitive's own scalar test could hit, never a verdict. A ray the filter drops
 ///   is certain to miss; a ray it keeps is tested by the scalar function, whose hit is then the
@@ -215,6 +215,20 @@ private:
     static V load(const T* p) noexcept { return load_lanes<T, V>(p); }
 };
 
+/// is_degenerate for a triangle's edges, compiled once: the register and the one-value forms of
+/// the kernels below take the same decision whatever the compiler fuses in cross().
+template <class T>
+ISIN_DETAIL_NOINLINE bool degenerate_triangle(const Vertex<T>& e1, const Vertex<T>& e2) noexcept {
+    return is_degenerate(e1, e2, cross(e1, e2));
+}
+/// surface_band's part that does not depend on the ray, (√3·e)·(2r + √3·e) for the sphere's
+/// surface_point_error e, compiled once (as degenerate_triangle).
+template <class T>
+ISIN_DETAIL_NOINLINE T surface_band_of_sphere(const Sphere<T>& sp) noexcept {
+    const T e = T(1.7320508075688772) * surface_point_error(sp); // surface_band's √3·e
+    return e * (T(2) * sp.radius + e);
+}
+
 /// Möller–Trumbore (note §10) for a register of rays or one ray, deciding and computing as
 /// intersect_moller_trumbore (rounding each a·b + c as lane_fma does), without culling, for a
 /// triangle with edges e1, e2 from v0 (a degenerate one, checked as there on the hit path only,
@@ -241,7 +255,7 @@ std::uint64_t moller_trumbore_register(const RayRegister<T, V>& r, const Vertex<
     const V Vd = lane_dot(r.dx, r.dy, r.dz, qx, qy, qz) * sign; // MT: v = Rd·Q / det
     const V tt = lane_dot(ex, ey, ez, qx, qy, qz) * sign;       // MT: t = E2·Q / det
     hit = hit & (Vd >= T(0)) & (U + Vd <= abs_det) & (tt > T(0));
-    if (lane_bits(hit) == 0 || is_degenerate(e1, e2, cross(e1, e2))) return 0;
+    if (lane_bits(hit) == 0 || degenerate_triangle(e1, e2)) return 0;
     const V inv_det = T(1) / abs_det;
     const V t = tt * inv_det;
     hit = hit & (t > T(0)) & (t < std::numeric_limits<T>::infinity());
@@ -289,17 +303,15 @@ std::uint64_t hit_register(const RayRegister<T, V>& r, const Triangle<T>& tri, T
 template <class T, class V>
 std::uint64_t hit_register(const RayRegister<T, V>& r, const Sphere<T>& sp, T* t, T* u, T* v) noexcept {
     if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return 0;
-    const T e = T(1.7320508075688772) * surface_point_error(sp); // surface_band's √3·e
-    return sphere_register(r, sp, e * (T(2) * sp.radius + e), t, u, v);
+    return sphere_register(r, sp, surface_band_of_sphere(sp), t, u, v);
 }
 } // namespace detail
 
 /// The hits of every ray of `lanes` on `shape` (bit k: ray k hits, at out.t[k] with out.u[k],
 /// out.v[k]; nothing is said of the lanes missed), for triangles by Möller–Trumbore without
 /// culling and spheres by §6: intersect_moller_trumbore's and intersect's decisions and
-/// quantities, a register of rays at a time. The Scene tests its objects this way for one ray
-/// (broadcast to a register) as for a stream, so that both give the same bits whatever the
-/// compiler fuses.
+/// quantities, a register of rays at a time. The Scene runs the same kernels for one ray on plain
+/// values (detail::hit_register on a RayRegister<T, T>), with the same bits.
 template <class T, class Shape>
 auto hit_lanes(const RayLanes<T>& lanes, const Shape& shape, RayLaneHits<T>& out) noexcept
     -> decltype(detail::hit_register(std::declval<const detail::RayRegister<T>&>(), shape, out.t, out.u, out.v)) {

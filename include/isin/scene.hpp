@@ -752,10 +752,9 @@ private:
             return true;
     }
 
-    // One ray's tests of single objects: hit(shape) is the ray's hit on it (or a miss), through
-    // the exact test in lanes with the ray in every lane of a register where the kind has it
-    // (exact_in_lanes), the passes the stream calls run on the rays of a stream, else
-    // intersect_primitive.
+    // One ray's tests of single objects: hit(shape) is the ray's hit on it (or a miss), by the
+    // exact test of the lanes (ray_lanes.hpp) run on plain values where the kind has it
+    // (exact_in_lanes) — the same bits as the stream calls' registers — else intersect_primitive.
     class OneRay {
     public:
         OneRay(const Scene& scene, const Ray<T>& ray) noexcept : scene_(scene), ray_(ray), ray_register_(ray) {}
