@@ -215,18 +215,21 @@ private:
     static V load(const T* p) noexcept { return load_lanes<T, V>(p); }
 };
 
-/// is_degenerate for a triangle's edges, compiled once: the register and the one-value forms of
-/// the kernels below take the same decision whatever the compiler fuses in cross().
+/// is_degenerate for a triangle's edges, the normal e1 × e2 rounded as lane_fma rounds: the
+/// register and the one-value forms of the kernels below take the same decision.
 template <class T>
-ISIN_DETAIL_NOINLINE bool degenerate_triangle(const Vertex<T>& e1, const Vertex<T>& e2) noexcept {
-    return is_degenerate(e1, e2, cross(e1, e2));
+bool degenerate_triangle(const Vertex<T>& e1, const Vertex<T>& e2) noexcept {
+    const Vertex<T> n{lane_cross_term(e1.y, e2.z, e1.z, e2.y), lane_cross_term(e1.z, e2.x, e1.x, e2.z),
+                      lane_cross_term(e1.x, e2.y, e1.y, e2.x)}; // §2: e1 × e2
+    return is_degenerate(e1, e2, n);
 }
 /// surface_band's part that does not depend on the ray, (√3·e)·(2r + √3·e) for the sphere's
-/// surface_point_error e, compiled once (as degenerate_triangle).
+/// surface_point_error e, rounded as lane_fma rounds (as degenerate_triangle).
 template <class T>
-ISIN_DETAIL_NOINLINE T surface_band_of_sphere(const Sphere<T>& sp) noexcept {
-    const T e = T(1.7320508075688772) * surface_point_error(sp); // surface_band's √3·e
-    return e * (T(2) * sp.radius + e);
+T surface_band_of_sphere(const Sphere<T>& sp) noexcept {
+    const T error = lane_fma(rounding_gamma<T>(6), sp.radius, rounding_gamma<T>(1) * max_abs(sp.center));
+    const T e = T(1.7320508075688772) * error; // surface_band's √3·e
+    return e * lane_fma(T(2), sp.radius, e);
 }
 
 /// Möller–Trumbore (note §10) for a register of rays or one ray, deciding and computing as
@@ -265,11 +268,10 @@ std::uint64_t moller_trumbore_register(const RayRegister<T, V>& r, const Vertex<
 
 /// The §6 sphere test for a register of rays or one ray, deciding and computing as
 /// intersect(ray, sphere) (rounding as lane_fma does), for a sphere of finite positive radius
-/// (the caller checks); `band0` is surface_band's part that does not depend on the ray. As
-/// moller_trumbore_register: the lanes hit, their t (u = v = 0) stored.
+/// (the caller checks). As moller_trumbore_register: the lanes hit, their t (u = v = 0) stored;
+/// surface_band's part that does not depend on the ray is computed past the early exit.
 template <class T, class V>
-std::uint64_t sphere_register(const RayRegister<T, V>& r, const Sphere<T>& sp, T band0, T* t_out, T* u_out,
-                              T* v_out) noexcept {
+std::uint64_t sphere_register(const RayRegister<T, V>& r, const Sphere<T>& sp, T* t_out, T* u_out, T* v_out) noexcept {
     constexpr T inf = std::numeric_limits<T>::infinity();
     const V a = lane_dot(r.dx, r.dy, r.dz, r.dx, r.dy, r.dz);
     const V inv_a = T(1) / a; // 1 for the note's unit Rd
@@ -283,6 +285,7 @@ std::uint64_t sphere_register(const RayRegister<T, V>& r, const Sphere<T>& sp, T
     const auto ahead = !((s < T(0)) & outside); // §6: not behind an origin outside
     auto hit = (a > T(0)) & (a < inf) & ahead & (m2 <= r2);
     if (lane_bits(hit) == 0) return 0;
+    const T band0 = surface_band_of_sphere(sp);
     const V q = lane_sqrt((V(r2) - m2) * inv_a); // §6: q = √(r2 − m2)
     const V c = (l2 - V(r2)) * inv_a;            // t_near · t_far
     const auto on_surface = lane_abs(l2 - V(r2)) <= lane_fma(V(rounding_gamma<T>(6)), l2 + V(r2), V(band0));
@@ -303,7 +306,7 @@ std::uint64_t hit_register(const RayRegister<T, V>& r, const Triangle<T>& tri, T
 template <class T, class V>
 std::uint64_t hit_register(const RayRegister<T, V>& r, const Sphere<T>& sp, T* t, T* u, T* v) noexcept {
     if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return 0;
-    return sphere_register(r, sp, surface_band_of_sphere(sp), t, u, v);
+    return sphere_register(r, sp, t, u, v);
 }
 } // namespace detail
 
