@@ -572,40 +572,47 @@ TEST_CASE_TEMPLATE("render: blocks of 8×8 pixels through the stream calls give 
 
 TEST_CASE_TEMPLATE("§7 the lights' terms in lanes: phong_light's value for each point, the same bits in any lane", T,
                    float, double) {
-    using Lanes = isin::detail::LightLanes<T>;
+    using Lanes = isin::detail::ShadingLanes<T>;
     constexpr std::size_t W = Lanes::width, N = 64;
     std::mt19937 rng(7);
     std::uniform_real_distribution<T> coord(T(-50), T(50)), unit(T(0), T(1));
     const auto direction = [&] { return isin::normalize(isin::Vertex<T>{coord(rng), coord(rng), coord(rng)}); };
     std::vector<isin::Material<T>> materials(N);
-    std::vector<isin::detail::Shading<T>> points(N);
+    struct Point {
+        const isin::Material<T>* m;
+        isin::Vertex<T> point, Ns, V;
+        isin::Color<T> object, local;
+    };
+    std::vector<Point> points(N);
     for (std::size_t i = 0; i < N; ++i) {
         isin::Material<T>& m = materials[i];
         m.kd = unit(rng), m.ks = unit(rng), m.shininess = T(1) + T(120) * unit(rng);
         m.specular_color = {unit(rng), unit(rng), unit(rng)};
-        isin::detail::Shading<T>& s = points[i];
+        Point& s = points[i];
         s.m = &m;
-        s.sp.point = {coord(rng), coord(rng), coord(rng)};
+        s.point = {coord(rng), coord(rng), coord(rng)};
         s.Ns = direction(), s.V = direction();
-        if (i % 5 == 0)
-            s.V = isin::reflect(-isin::normalize(isin::Vertex<T>{0, 60, 0} - s.sp.point), s.Ns); // highlight
+        if (i % 5 == 0) s.V = isin::reflect(-isin::normalize(isin::Vertex<T>{0, 60, 0} - s.point), s.Ns); // highlight
         s.object = {unit(rng), unit(rng), unit(rng)};
         s.local = {unit(rng), unit(rng), unit(rng)};
     }
-    points[3].sp.point = {0, 60, 0}; // at the light: no direction, unlit
+    points[3].point = {0, 60, 0}; // at the light: no direction, unlit
     const isin::PointLight<T> light{{0, 60, 0}, {T(0.9), T(0.8), T(0.7)}};
     // All 64 points in one set of lanes, light visible in part.
     alignas(64) T lanes[Lanes::rows * N];
-    for (std::size_t i = 0; i < N; ++i) Lanes::set(lanes, N, i, points[i]);
+    const auto set = [](T* at, std::size_t stride, std::size_t k, const Point& s) {
+        Lanes::set_lit(at, stride, k, s.point, s.Ns, s.V, *s.m, s.object, s.local);
+    };
+    for (std::size_t i = 0; i < N; ++i) set(lanes, N, i, points[i]);
     for (std::size_t k = 0; k < N; k += W) isin::detail::light_direction_pass(lanes + k, N, 0, light.position);
     T* visible = lanes + Lanes::field(0, Lanes::visible) * N;
     for (std::size_t i = 0; i < N; ++i) visible[i] = i % 7 == 0 ? T(0) : i % 3 == 0 ? T(0.5) : T(1);
     for (std::size_t k = 0; k < N; k += W) isin::detail::light_term_pass(lanes + k, N, 0, light.color);
     int lit = 0, highlights = 0, same_bits = 0;
     for (std::size_t i = 0; i < N; ++i) {
-        const isin::detail::Shading<T>& s = points[i];
+        const Point& s = points[i];
         // The scalar formulas (shading.hpp).
-        const isin::Vertex<T> L = isin::normalize(light.position - s.sp.point);
+        const isin::Vertex<T> L = isin::normalize(light.position - s.point);
         const T n_dot_l = isin::dot(s.Ns, L);
         isin::Color<T> expected = s.local;
         if (n_dot_l > T(0) && visible[i] > T(0))
@@ -618,7 +625,7 @@ TEST_CASE_TEMPLATE("§7 the lights' terms in lanes: phong_light's value for each
         CHECK(std::fabs(got.b - expected.b) <= tolerance);
         // The same point alone, one value per field, as trace() computes it: the same bits.
         T one[Lanes::rows];
-        Lanes::set(one, 1, 0, s);
+        set(one, 1, 0, s);
         isin::detail::light_direction_pass<T, T>(one, 1, 0, light.position);
         one[Lanes::field(0, Lanes::visible)] = visible[i];
         isin::detail::light_term_pass<T, T>(one, 1, 0, light.color);
@@ -630,4 +637,89 @@ TEST_CASE_TEMPLATE("§7 the lights' terms in lanes: phong_light's value for each
     CHECK(lit < int(N) - 10);
     CHECK(highlights > 3);
     CHECK(Lanes::local(lanes, N, 3) == points[3].local);
+}
+
+TEST_CASE_TEMPLATE(
+    "side_pass: the normals on the ray's side and offset_ray_origin's origins, the same bits in any lane", T, float,
+    double) {
+    using Lanes = isin::detail::ShadingLanes<T>;
+    constexpr std::size_t W = Lanes::width, N = 64;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<T> coord(T(-50), T(50)), small(T(0), T(1e-4));
+    const auto direction = [&] { return isin::normalize(isin::Vertex<T>{coord(rng), coord(rng), coord(rng)}); };
+    struct Point {
+        isin::Vertex<T> point, error, normal, shading_normal, shading_point, d;
+    };
+    std::vector<Point> points(N);
+    for (std::size_t i = 0; i < N; ++i) {
+        Point& s = points[i];
+        s.point = {coord(rng), coord(rng), coord(rng)};
+        s.error = {small(rng), small(rng), small(rng)};
+        s.normal = direction(), s.d = direction();
+        // flat (shading normal = normal, shading point = point) or smooth (its own of both)
+        s.shading_normal = i % 3 == 0 ? direction() : s.normal;
+        s.shading_point = i % 4 == 0 ? s.point + T(0.01) * s.normal : s.point;
+    }
+    const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
+    points[5].point.x = inf;             // a point that is not finite: the origins are the point
+    points[9].error.y = nan;             // nor its bound
+    points[13].normal = {nan, nan, nan}; // nor the normal
+    alignas(64) T lanes[Lanes::rows * N];
+    const auto set = [](T* at, std::size_t stride, std::size_t k, const Point& s) {
+        Lanes::clear(at, stride, k);
+        Lanes::set(at, stride, k, Lanes::px, s.point), Lanes::set(at, stride, k, Lanes::ex, s.error);
+        Lanes::set(at, stride, k, Lanes::gx, s.normal), Lanes::set(at, stride, k, Lanes::nx, s.shading_normal);
+        Lanes::set(at, stride, k, Lanes::hx, s.shading_point), Lanes::set(at, stride, k, Lanes::vx, s.d);
+    };
+    for (std::size_t i = 0; i < N; ++i) set(lanes, N, i, points[i]);
+    for (std::size_t k = 0; k < N; k += W) isin::detail::side_pass(lanes + k, N);
+    int same_bits = 0, entering = 0, lifted = 0;
+    const auto bits_equal = [](const isin::Vertex<T>& a, const isin::Vertex<T>& b) {
+        return std::memcmp(&a, &b, sizeof a) == 0;
+    };
+    for (std::size_t i = 0; i < N; ++i) {
+        CAPTURE(i);
+        const Point& s = points[i];
+        const isin::Vertex<T> Nf = Lanes::vertex(lanes, N, i, Lanes::gx), Ns = Lanes::vertex(lanes, N, i, Lanes::nx);
+        const bool front = lanes[Lanes::front * N + i] != T(0);
+        entering += front;
+        if (i != 13) {
+            // The sides as the scalar formulas decide them (far from grazing: the rays are random).
+            CHECK(front == (isin::dot(s.normal, s.d) < T(0)));
+            CHECK(Nf == (front ? s.normal : -s.normal));
+            CHECK(Ns == (isin::dot(s.shading_normal, Nf) < T(0) ? -s.shading_normal : s.shading_normal));
+        }
+        CHECK(Lanes::vertex(lanes, N, i, Lanes::vx) == -s.d);
+        // Above: offset_ray_origin's origin to Nf's side, bit for bit; shadow rays from it on flat
+        // surfaces, else from the shading point with one more rounding in its bound.
+        const isin::Vertex<T> above = isin::offset_ray_origin({s.point, s.error}, Nf, Nf);
+        CHECK(bits_equal(Lanes::vertex(lanes, N, i, Lanes::ax), above));
+        const bool flat = s.shading_point == s.point;
+        lifted += !flat;
+        const isin::Vertex<T> from = Lanes::vertex(lanes, N, i, Lanes::hx);
+        if (flat) {
+            CHECK(bits_equal(from, above));
+        } else { // Hanika's lift: the shading point's bound is the point's plus γ₁·|shading point|
+            const T g1 = isin::rounding_gamma<T>(1);
+            const isin::Vertex<T>& q = s.shading_point;
+            const isin::Vertex<T> bound{isin::detail::lane_fma(g1, std::fabs(q.x), s.error.x),
+                                        isin::detail::lane_fma(g1, std::fabs(q.y), s.error.y),
+                                        isin::detail::lane_fma(g1, std::fabs(q.z), s.error.z)};
+            CHECK(bits_equal(from, isin::offset_ray_origin({q, bound}, Nf, Nf)));
+            if (i != 13) CHECK(isin::dot(from - q, Nf) > T(0));
+        }
+        if (i == 5 || i == 9 || i == 13) CHECK(bits_equal(Lanes::vertex(lanes, N, i, Lanes::ax), s.point));
+        // The same point alone, one value per field: the same bits.
+        T one[Lanes::rows];
+        set(one, 1, 0, s);
+        isin::detail::side_pass<T, T>(one, 1);
+        bool same = true;
+        for (std::size_t f = 0; f < Lanes::ox; ++f)
+            same = same && std::memcmp(&one[f], &lanes[f * N + i], sizeof(T)) == 0;
+        same_bits += same;
+    }
+    CHECK(same_bits == int(N));
+    CHECK(entering > 10); // both sides and both kinds of shading point were seen
+    CHECK(entering < int(N) - 10);
+    CHECK(lifted > 10);
 }

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "detail/attributes.hpp"
+#include "detail/lane_pack.hpp"
 #include "error_bound.hpp"
 #include "ray.hpp"
 #include "vec.hpp"
@@ -29,6 +30,29 @@ template <class T>
     return p + (T(256) * eps * magnitude) * n;
 }
 
+namespace detail {
+/// offset_ray_origin's move (pbrt-v4 §6.8.6) for one point or a register of lanes (V = T or
+/// LaneRegister's V), rounded alike in both (lane_dot, lane_fma): (x, y, z) moves along the unit
+/// normal n (already turned to the side the ray leaves by) by d = |n|·error to
+/// (x, y, z) + d·n; (ox, oy, oz) = d·n, whose signs step_off follows.
+template <class T, class V>
+ISIN_DETAIL_INLINE void offset_lanes(V& x, V& y, V& z, const V& ex, const V& ey, const V& ez, const V& nx, const V& ny,
+                                     const V& nz, V& ox, V& oy, V& oz) noexcept {
+    const V d = lane_dot(lane_abs(nx), lane_abs(ny), lane_abs(nz), ex, ey, ez); // pbrt-v4: d = |n|·δp
+    ox = d * nx, oy = d * ny, oz = d * nz;
+    x = lane_fma(d, nx, x), y = lane_fma(d, ny, y), z = lane_fma(d, nz, z);
+}
+/// The origin from offset_lanes' moved point po and move o: each moved coordinate one ulp further
+/// from p (pbrt-v4: the sum may have rounded towards it); p itself where anything in p, its error
+/// or n was not finite (po is then not finite, or NaN).
+template <class T>
+[[nodiscard]] ISIN_DETAIL_INLINE Vertex<T> step_off(const Vertex<T>& p, const Vertex<T>& po,
+                                                    const Vertex<T>& o) noexcept {
+    if (!(std::fabs(po.x) + std::fabs(po.y) + std::fabs(po.z) < std::numeric_limits<T>::infinity())) return p;
+    return {step_away(po.x, o.x), step_away(po.y, o.y), step_away(po.z, o.z)};
+}
+} // namespace detail
+
 /// Where a secondary ray leaving a surface point p (with its error bound) in direction w starts:
 /// p moved along the unit geometric normal n, to the side w points to, by d = |n|·error — the
 /// distance from p to the plane through the farthest corner of p's error box — then each moved
@@ -38,13 +62,10 @@ template <class T>
 template <class T>
 [[nodiscard]] ISIN_DETAIL_INLINE Vertex<T> offset_ray_origin(const BoundedPoint<T>& p, const Vertex<T>& n,
                                                              const Vertex<T>& w) noexcept {
-    const T d = dot(abs(n), p.error);                         // pbrt-v4: d = |n|·δp
-    const Vertex<T> offset = (dot(w, n) < T(0) ? -d : d) * n; // pbrt-v4: along n, to w's side
-    const Vertex<T> po = p.point + offset;
-    // Anything not finite in p, its error or n leaves po not finite (or NaN): p comes back.
-    if (!(std::fabs(po.x) + std::fabs(po.y) + std::fabs(po.z) < std::numeric_limits<T>::infinity())) return p.point;
-    // pbrt-v4: each moved coordinate one ulp further from p (the sum may have rounded towards it).
-    return {detail::step_away(po.x, offset.x), detail::step_away(po.y, offset.y), detail::step_away(po.z, offset.z)};
+    const Vertex<T> side = dot(w, n) < T(0) ? -n : n; // pbrt-v4: along n, to w's side
+    T x = p.point.x, y = p.point.y, z = p.point.z, ox, oy, oz;
+    detail::offset_lanes<T, T>(x, y, z, p.error.x, p.error.y, p.error.z, side.x, side.y, side.z, ox, oy, oz);
+    return detail::step_off(p.point, {x, y, z}, {ox, oy, oz});
 }
 
 /// A secondary ray from surface point p (unit geometric normal n) in direction w, starting at

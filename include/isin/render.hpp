@@ -97,67 +97,40 @@ namespace detail {
 } // namespace detail
 
 namespace detail {
-// What shading a hit needs between its shadow rays (trace, and the renderer's tiles): the
-// surface, its material and colour, the normals on the ray's side, where secondary rays start,
-// and the colour gathered so far.
+// What a shaded point's reflected and transmitted rays need (§8), and its colour so far.
 template <class T>
 struct Shading {
-    SurfacePoint<T> sp;
     const Material<T>* m;
-    Color<T> object, local;
-    Vertex<T> Nf, Ns, V, above, shadow_from;
+    Color<T> local;
+    Vertex<T> point, error, Nf, Ns, above;
     bool entering;
 };
 
-// The hit's surface, material and ambient term (§7), and where its secondary rays start.
-template <class T, template <class> class... S>
-Shading<T> begin_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Hit<T>& sh) {
-    Shading<T> s;
-    s.sp = scene.surface(ray, sh);
-    const SurfacePoint<T>& sp = s.sp;
-    s.m = &scene.material(sp.material);
-    const Material<T>& m = *s.m;
-    s.object = sp.tint * (m.texture >= 0 && sp.has_texture_coordinates
-                              ? sample(scene.texture(m.texture), sp.st[0], sp.st[1],
-                                       m.texture_filter.value_or(scene.texture_filter))
-                              : m.color);
-    const Vertex<T>& d = ray.direction;
-    s.entering = dot(sp.normal, d) < T(0);
-    s.Nf = s.entering ? sp.normal : -sp.normal; // the normal on the ray's side
-    // The shading normal on the same side (equal to Nf on flat surfaces); lights the point (§7).
-    s.Ns = dot(sp.shading_normal, s.Nf) < T(0) ? -sp.shading_normal : sp.shading_normal;
-    s.V = -d;                                                          // §7: towards the eye
-    s.local = m.ka * m.ambient_color * s.object * scene.ambient_light; // §7: ambient
-    // Secondary rays start off the surface by the hit point's error bound (pbrt-v4 §6.8.6): above
-    // it (reflection, shadow rays) or, for refraction, below it (end_shading).
-    const BoundedPoint<T> p{sp.point, sp.error};
-    s.above = offset_ray_origin(p, s.Nf, s.Nf);
-    // Shadow rays leave from the shading point (= the hit point on flat surfaces), off the surface;
-    // Hanika's lift adds one rounding to the point's error.
-    s.shadow_from = sp.shading_point == sp.point
-                        ? s.above
-                        : offset_ray_origin({sp.shading_point, sp.error + rounding_gamma<T>(1) * abs(sp.shading_point)},
-                                            s.Nf, s.Nf);
-    return s;
-}
-
-// The lights' Phong terms (§7) of shaded points, lane by lane. Lane k of field f is at
-// lanes[f·stride + k]: each point's position, shading normal, direction to the eye, material and
-// colour so far, and for each of up to `slots` lights at a time its direction L, N·L and the
-// fraction of it that gets through (what the shadow rays found). The renderer's streams (up to
-// stream_rays points) run the passes a register of lanes at a time (lane_pack.hpp), trace() on
-// its one point; both round alike (lane_fma), so a point gets the same colour bit for bit.
+// A stream's shaded points as lanes (trace()'s one point as one lane): lane k of field f is at
+// lanes[f·stride + k]. Each hit's surface is written into its lane (surface_into_lanes), then
+// side_pass turns the normals to the ray's side and places the secondary rays' origins, and the
+// light passes add each light's Phong terms (§7). The renderer's streams (up to stream_rays
+// points) run the passes a register of lanes at a time (lane_pack.hpp), trace() on its one
+// point; both round alike (lane_fma), so a point gets the same colour bit for bit.
 template <class T>
-struct LightLanes : LaneRegister<T> {
+struct ShadingLanes : LaneRegister<T> {
     // clang-format off
     enum Field : std::size_t {
-        px, py, pz,         // the point lit
-        nx, ny, nz,         // the normal it is lit by (Ns)
-        vx, vy, vz,         // towards the eye (V)
+        px, py, pz,         // the hit point
+        nx, ny, nz,         // the shading normal; on the ray's side after side_pass (Ns), lights it
+        vx, vy, vz,         // the ray's direction; towards the eye after side_pass (V)
         kd, ks, shininess,  // the material's Phong weights
         cr, cg, cb,         // the surface's colour (object)
         sr, sg, sb,         // the highlight's
         lr, lg, lb,         // the local colour so far: the ambient term, then each light's
+        ex, ey, ez,         // the hit point's error bound
+        gx, gy, gz,         // the geometric normal; on the ray's side after side_pass (Nf)
+        hx, hy, hz,         // the shading point; after side_pass where shadow rays start
+        ax, ay, az,         // after side_pass: where reflected rays start (above the surface)
+        front,              // after side_pass: 1 where the ray enters through the front face, else 0
+        ox, oy, oz,         // side_pass's scratch: the move to `above`,
+        qx, qy, qz,         // the point moved for shadow rays,
+        wx, wy, wz,         // and that move
         fields
     };
     // clang-format on
@@ -167,29 +140,121 @@ struct LightLanes : LaneRegister<T> {
     // Field f of light slot `slot`.
     static constexpr std::size_t field(std::size_t slot, PerLight f) noexcept { return fields + slot * per_light + f; }
 
-    // Lane k holds shaded point s.
-    static void set(T* lanes, std::size_t stride, std::size_t k, const Shading<T>& s) noexcept {
-        const Material<T>& m = *s.m;
-        // clang-format off
-        const T values[fields] = {s.sp.point.x, s.sp.point.y, s.sp.point.z,
-                                  s.Ns.x, s.Ns.y, s.Ns.z,
-                                  s.V.x, s.V.y, s.V.z,
-                                  m.kd, m.ks, m.shininess,
-                                  s.object.r, s.object.g, s.object.b,
-                                  m.specular_color.r, m.specular_color.g, m.specular_color.b,
-                                  s.local.r, s.local.g, s.local.b};
-        // clang-format on
-        for (std::size_t f = 0; f < fields; ++f) lanes[f * stride + k] = values[f];
-    }
     // Lane k holds nothing: zeros, which no light lights (N·L = 0).
     static void clear(T* lanes, std::size_t stride, std::size_t k) noexcept {
         for (std::size_t f = 0; f < rows; ++f) lanes[f * stride + k] = T(0);
+    }
+    // Sets a vector's three fields from f on.
+    static void set(T* lanes, std::size_t stride, std::size_t k, std::size_t f, const Vertex<T>& v) noexcept {
+        lanes[f * stride + k] = v.x, lanes[(f + 1) * stride + k] = v.y, lanes[(f + 2) * stride + k] = v.z;
+    }
+    static void set(T* lanes, std::size_t stride, std::size_t k, std::size_t f, const Color<T>& c) noexcept {
+        lanes[f * stride + k] = c.r, lanes[(f + 1) * stride + k] = c.g, lanes[(f + 2) * stride + k] = c.b;
+    }
+    // The vector in the three fields from f on.
+    static Vertex<T> vertex(const T* lanes, std::size_t stride, std::size_t k, std::size_t f) noexcept {
+        return {lanes[f * stride + k], lanes[(f + 1) * stride + k], lanes[(f + 2) * stride + k]};
+    }
+    // What the lights need of lane k (for points set by hand, as the tests do): the point, the
+    // normal that lights it, the direction to the eye, the material, colour and local colour.
+    static void set_lit(T* lanes, std::size_t stride, std::size_t k, const Vertex<T>& point, const Vertex<T>& Ns,
+                        const Vertex<T>& V, const Material<T>& m, const Color<T>& object,
+                        const Color<T>& local) noexcept {
+        set(lanes, stride, k, px, point), set(lanes, stride, k, nx, Ns), set(lanes, stride, k, vx, V);
+        lanes[kd * stride + k] = m.kd, lanes[ks * stride + k] = m.ks, lanes[shininess * stride + k] = m.shininess;
+        set(lanes, stride, k, cr, object), set(lanes, stride, k, sr, m.specular_color),
+            set(lanes, stride, k, lr, local);
     }
     // The local colour of lane k.
     static Color<T> local(const T* lanes, std::size_t stride, std::size_t k) noexcept {
         return {lanes[lr * stride + k], lanes[lg * stride + k], lanes[lb * stride + k]};
     }
+    // Lane k (after side_pass and the lights) as what its secondary rays need; m its material.
+    static Shading<T> shading(const T* lanes, std::size_t stride, std::size_t k, const Material<T>& m) noexcept {
+        return {&m,
+                local(lanes, stride, k),
+                vertex(lanes, stride, k, px),
+                vertex(lanes, stride, k, ex),
+                vertex(lanes, stride, k, gx),
+                vertex(lanes, stride, k, nx),
+                vertex(lanes, stride, k, ax),
+                lanes[front * stride + k] != T(0)};
+    }
 };
+
+// The surface of `ray`'s hit into lane k: point and error, normals, the ray's direction, the
+// material's Phong weights, the surface's colour (texture or material, times the vertex colour)
+// and its ambient term (§7). Returns the material.
+template <class T, template <class> class... S>
+const Material<T>& surface_into_lanes(const Scene<T, S...>& scene, const Ray<T>& ray, const Hit<T>& hit, T* lanes,
+                                      std::size_t stride, std::size_t k) {
+    using Lanes = ShadingLanes<T>;
+    const SurfacePoint<T> sp = scene.surface(ray, hit);
+    const Material<T>& m = scene.material(sp.material);
+    const Color<T> object = sp.tint * (m.texture >= 0 && sp.has_texture_coordinates
+                                           ? sample(scene.texture(m.texture), sp.st[0], sp.st[1],
+                                                    m.texture_filter.value_or(scene.texture_filter))
+                                           : m.color);
+    const Color<T> ambient = m.ka * m.ambient_color * object * scene.ambient_light; // §7: ambient
+    Lanes::set(lanes, stride, k, Lanes::px, sp.point);
+    Lanes::set(lanes, stride, k, Lanes::ex, sp.error);
+    Lanes::set(lanes, stride, k, Lanes::gx, sp.normal);
+    Lanes::set(lanes, stride, k, Lanes::nx, sp.shading_normal);
+    Lanes::set(lanes, stride, k, Lanes::hx, sp.shading_point);
+    Lanes::set(lanes, stride, k, Lanes::vx, ray.direction);
+    lanes[Lanes::kd * stride + k] = m.kd, lanes[Lanes::ks * stride + k] = m.ks;
+    lanes[Lanes::shininess * stride + k] = m.shininess;
+    Lanes::set(lanes, stride, k, Lanes::cr, object);
+    Lanes::set(lanes, stride, k, Lanes::sr, m.specular_color);
+    Lanes::set(lanes, stride, k, Lanes::lr, ambient);
+    return m;
+}
+
+// For the register of lanes at p (V = LaneRegister's) or the one point at p (V = T): the
+// geometric and the shading normal turned to the side the ray came from (Nf, Ns: equal on flat
+// surfaces), the direction to the eye (§7: V = −Rd), and where secondary rays start, off the
+// surface by the hit point's error bound (pbrt-v4 §6.8.6, offset_ray_origin): above it for
+// reflected rays and, from the shading point, for shadow rays (Hanika's lift adds one rounding
+// to the point's error). Refracted rays start below it (secondary_rays).
+template <class T, class V = typename LaneRegister<T>::V>
+ISIN_DETAIL_NOINLINE void side_pass(T* p, std::size_t stride) noexcept {
+    using Lanes = ShadingLanes<T>;
+    constexpr std::size_t W = std::is_same_v<V, T> ? 1 : LaneRegister<T>::width;
+    const auto at = [&](std::size_t f) { return load_lanes<T, V>(p + f * stride); };
+    const auto put = [&](std::size_t f, const V& v) { store_lanes(v, p + f * stride); };
+    const V dx = at(Lanes::vx), dy = at(Lanes::vy), dz = at(Lanes::vz);
+    const auto entering = lane_dot(at(Lanes::gx), at(Lanes::gy), at(Lanes::gz), dx, dy, dz) < T(0);
+    put(Lanes::front, select(entering, V(T(1)), V(T(0))));
+    const V fx = negate_where(!entering, at(Lanes::gx)), fy = negate_where(!entering, at(Lanes::gy)),
+            fz = negate_where(!entering, at(Lanes::gz)); // Nf: the normal on the ray's side
+    put(Lanes::gx, fx), put(Lanes::gy, fy), put(Lanes::gz, fz);
+    const V sx = at(Lanes::nx), sy = at(Lanes::ny), sz = at(Lanes::nz);
+    const auto away = lane_dot(sx, sy, sz, fx, fy, fz) < T(0); // Ns on Nf's side
+    put(Lanes::nx, negate_where(away, sx)), put(Lanes::ny, negate_where(away, sy)),
+        put(Lanes::nz, negate_where(away, sz));
+    put(Lanes::vx, -dx), put(Lanes::vy, -dy), put(Lanes::vz, -dz); // §7: towards the eye
+    const V ex = at(Lanes::ex), ey = at(Lanes::ey), ez = at(Lanes::ez);
+    V x = at(Lanes::px), y = at(Lanes::py), z = at(Lanes::pz), ox = x, oy = x, oz = x;
+    offset_lanes<T, V>(x, y, z, ex, ey, ez, fx, fy, fz, ox, oy, oz);
+    put(Lanes::ax, x), put(Lanes::ay, y), put(Lanes::az, z), put(Lanes::ox, ox), put(Lanes::oy, oy), put(Lanes::oz, oz);
+    const V hx = at(Lanes::hx), hy = at(Lanes::hy), hz = at(Lanes::hz);
+    const T g1 = rounding_gamma<T>(1);
+    x = hx, y = hy, z = hz;
+    offset_lanes<T, V>(x, y, z, lane_fma(V(g1), lane_abs(hx), ex), lane_fma(V(g1), lane_abs(hy), ey),
+                       lane_fma(V(g1), lane_abs(hz), ez), fx, fy, fz, ox, oy, oz);
+    put(Lanes::qx, x), put(Lanes::qy, y), put(Lanes::qz, z), put(Lanes::wx, ox), put(Lanes::wy, oy), put(Lanes::wz, oz);
+    for (std::size_t k = 0; k < W; ++k) { // each moved coordinate one ulp further (step_off), lane by lane
+        const Vertex<T> point = Lanes::vertex(p, stride, k, Lanes::px),
+                        shading = Lanes::vertex(p, stride, k, Lanes::hx);
+        const Vertex<T> above =
+            step_off(point, Lanes::vertex(p, stride, k, Lanes::ax), Lanes::vertex(p, stride, k, Lanes::ox));
+        Lanes::set(p, stride, k, Lanes::ax, above);
+        Lanes::set(p, stride, k, Lanes::hx,
+                   shading == point ? above
+                                    : step_off(shading, Lanes::vertex(p, stride, k, Lanes::qx),
+                                               Lanes::vertex(p, stride, k, Lanes::wx)));
+    }
+}
 
 // §7 for the register of lanes at p (V = LaneRegister's) or the one point at p (V = T): the unit
 // direction L from each point to the light (as normalize(): none, 0, where light − point has no
@@ -198,7 +263,7 @@ struct LightLanes : LaneRegister<T> {
 template <class T, class V = typename LaneRegister<T>::V>
 ISIN_DETAIL_NOINLINE void light_direction_pass(T* p, std::size_t stride, std::size_t slot,
                                                const Vertex<T>& light) noexcept {
-    using Lanes = LightLanes<T>;
+    using Lanes = ShadingLanes<T>;
     const auto at = [&](std::size_t f) { return load_lanes<T, V>(p + f * stride); };
     V x = V(light.x) - at(Lanes::px), y = V(light.y) - at(Lanes::py), z = V(light.z) - at(Lanes::pz);
     lane_normalize<T>(x, y, z);
@@ -215,7 +280,7 @@ ISIN_DETAIL_NOINLINE void light_direction_pass(T* p, std::size_t stride, std::si
 // its order, each product added through lane_fma).
 template <class T, class V = typename LaneRegister<T>::V>
 ISIN_DETAIL_NOINLINE void light_term_pass(T* p, std::size_t stride, std::size_t slot, const Color<T>& light) noexcept {
-    using Lanes = LightLanes<T>;
+    using Lanes = ShadingLanes<T>;
     constexpr std::size_t W = std::is_same_v<V, T> ? 1 : LaneRegister<T>::width;
     const auto at = [&](std::size_t f) { return load_lanes<T, V>(p + f * stride); };
     const auto of_light = [&](typename Lanes::PerLight f) { return p + Lanes::field(slot, f) * stride; };
@@ -258,12 +323,13 @@ template <class T, template <class> class... S>
         detail::throw_too_deep(depth); // render() checks opt.max_depth; this bounds direct calls too
     const Hit<T> sh = scene.intersect(ray, std::numeric_limits<T>::infinity(), skip);
     if (!sh) return scene.background;
-    detail::Shading<T> s = detail::begin_shading(scene, ray, sh);
-    // The lights one at a time: the passes the renderer's streams run a register at a time, on
-    // one value (the same bits).
-    using Lanes = detail::LightLanes<T>;
+    // The point as one lane, through the passes the renderer's streams run a register at a time
+    // (the same bits): its surface and sides, then the lights one at a time.
+    using Lanes = detail::ShadingLanes<T>;
     T lanes[Lanes::rows];
-    Lanes::set(lanes, 1, 0, s);
+    const Material<T>& m = detail::surface_into_lanes(scene, ray, sh, lanes, 1, 0);
+    detail::side_pass<T, T>(lanes, 1);
+    const Vertex<T> from = Lanes::vertex(lanes, 1, 0, Lanes::hx); // where shadow rays start
     const T& n_dot_l = lanes[Lanes::field(0, Lanes::n_dot_l)];
     T& visible = lanes[Lanes::field(0, Lanes::visible)];
     for (const PointLight<T>& light : scene.lights) {
@@ -272,11 +338,11 @@ template <class T, template <class> class... S>
         visible = T(1);
         if (opt.shadows) { // §9: a ray towards the light; anything nearer than the light shadows
             ++stats.shadow;
-            visible = scene.transmittance(Ray<T>{s.shadow_from, light.position - s.shadow_from}, T(1));
+            visible = scene.transmittance(Ray<T>{from, light.position - from}, T(1));
         }
         detail::light_term_pass<T, T>(lanes, 1, 0, light.color);
     }
-    s.local = Lanes::local(lanes, 1, 0);
+    const detail::Shading<T> s = Lanes::shading(lanes, 1, 0, m);
     return detail::end_shading(scene, ray, s, depth, opt, stats);
 }
 
@@ -311,7 +377,7 @@ Secondary<T> secondary_rays(const Ray<T>& ray, const Shading<T>& s, RenderStats&
         }
         ++stats.refraction;
         const Vertex<T> origin =
-            reflected ? s.above : offset_ray_origin(BoundedPoint<T>{s.sp.point, s.sp.error}, s.Nf, -s.Nf);
+            reflected ? s.above : offset_ray_origin(BoundedPoint<T>{s.point, s.error}, s.Nf, -s.Nf);
         out.transmits = true, out.transmitted = {origin, dir};
     }
     return out;
@@ -319,8 +385,8 @@ Secondary<T> secondary_rays(const Ray<T>& ray, const Shading<T>& s, RenderStats&
 
 // Whether a shaded point at `depth` sends secondary rays (else its colour is its local colour).
 template <class T>
-bool has_secondary(const Shading<T>& s, int depth, const RenderOptions& opt) noexcept {
-    return depth < opt.max_depth && (s.m->reflectivity > T(0) || s.m->transparency > T(0));
+bool has_secondary(const Material<T>& m, int depth, const RenderOptions& opt) noexcept {
+    return depth < opt.max_depth && (m.reflectivity > T(0) || m.transparency > T(0));
 }
 
 // The colour of a point with secondary rays: its local colour and what they brought back (§8).
@@ -337,7 +403,7 @@ Color<T> mix_secondary(const Shading<T>& s, const Color<T>& reflected, const Col
 template <class T, template <class> class... S>
 Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shading<T>& s, int depth,
                      const RenderOptions& opt, RenderStats& stats) {
-    if (!has_secondary(s, depth, opt)) return s.local;
+    if (!has_secondary(*s.m, depth, opt)) return s.local;
     const Secondary<T> next = secondary_rays(ray, s, stats);
     Color<T> reflected{}, transmitted{};
     if (next.reflects) reflected = trace(scene, next.reflected, depth + 1, opt, stats);
@@ -365,24 +431,26 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
     constexpr int N = stream_rays;
     Hit<T> hits[N];
     scene.intersect(rays, std::size_t(n), hits, skip);
-    Shading<T> s[N];
+    // Each hit's surface into its lane, then the passes a register of lanes at a time.
+    using Lanes = ShadingLanes<T>;
+    constexpr std::size_t W = Lanes::width, stride = N;
+    alignas(64) T lanes[Lanes::rows * stride];
+    const Material<T>* material[N];
     int shaded[N], count = 0;
     for (int k = 0; k < n; ++k) {
         if (!hits[k]) {
             out[k] = scene.background;
             continue;
         }
-        s[k] = begin_shading(scene, rays[k], hits[k]);
+        material[count] = &surface_into_lanes(scene, rays[k], hits[k], lanes, stride, std::size_t(count));
         shaded[count++] = k;
     }
-    // §7, §9: the lights' terms in lanes (LightLanes), up to `slots` lights at a time, as many
-    // as fit their shadow rays in one stream.
-    using Lanes = LightLanes<T>;
-    constexpr std::size_t W = Lanes::width, stride = N;
-    alignas(64) T lanes[Lanes::rows * stride];
     const std::size_t padded = (std::size_t(count) + W - 1) / W * W;
-    for (int i = 0; i < count; ++i) Lanes::set(lanes, stride, std::size_t(i), s[shaded[i]]);
     for (std::size_t k = std::size_t(count); k < padded; ++k) Lanes::clear(lanes, stride, k);
+    for (std::size_t k = 0; k < padded; k += W) side_pass(lanes + k, stride);
+    // §7, §9: the lights' terms, up to `slots` lights at a time, as many as fit their shadow rays
+    // in one stream.
+    const T* from[3] = {lanes + Lanes::hx * stride, lanes + Lanes::hy * stride, lanes + Lanes::hz * stride};
     const std::size_t lights = scene.lights.size();
     for (std::size_t first = 0; first < lights;) {
         Ray<T> shadow[N];
@@ -396,10 +464,10 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
             const T* n_dot_l = lanes + Lanes::field(slot, Lanes::n_dot_l) * stride;
             T* visible = lanes + Lanes::field(slot, Lanes::visible) * stride;
             for (std::size_t k = 0; k < padded; ++k) visible[k] = T(0);
-            for (int i = 0; i < count; ++i) {
+            for (std::size_t i = 0; i < std::size_t(count); ++i) {
                 if (!(n_dot_l[i] > T(0))) continue; // §7: facing away → unlit, no shadow ray needed
-                const Vertex<T>& from = s[shaded[i]].shadow_from;
-                visible_of[m] = visible + i, shadow[m++] = {from, light.position - from};
+                const Vertex<T> o{from[0][i], from[1][i], from[2][i]};
+                visible_of[m] = visible + i, shadow[m++] = {o, light.position - o};
             }
         }
         T visible[N];
@@ -423,22 +491,24 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
                 light_term_pass(lanes + k, stride, light - first, scene.lights[light].color);
         first = last;
     }
-    for (int i = 0; i < count; ++i) s[shaded[i]].local = Lanes::local(lanes, stride, std::size_t(i));
     // §8: the reflected and the transmitted rays of every point that has them, as two streams.
     Ray<T> next[2][N];
     int counts[2] = {0, 0}, slot[2][N];
+    int mixed[N], mixes = 0; // the points with secondary rays, by lane
     for (int i = 0; i < count; ++i) {
         const int k = shaded[i];
-        if (!has_secondary(s[k], depth, opt)) {
-            out[k] = s[k].local;
+        if (!has_secondary(*material[i], depth, opt)) {
+            out[k] = Lanes::local(lanes, stride, std::size_t(i));
             continue;
         }
-        const Secondary<T> sec = secondary_rays(rays[k], s[k], stats);
+        const Secondary<T> sec =
+            secondary_rays(rays[k], Lanes::shading(lanes, stride, std::size_t(i), *material[i]), stats);
         slot[0][k] = slot[1][k] = -1;
         if (sec.reflects) slot[0][k] = counts[0], next[0][counts[0]++] = sec.reflected;
         if (sec.transmits) slot[1][k] = counts[1], next[1][counts[1]++] = sec.transmitted;
+        mixed[mixes++] = i;
     }
-    if (counts[0] + counts[1] == 0) return;
+    if (mixes == 0) return;
     Color<T> back[2][N];
     for (int j = 0; j < 2; ++j) {
         if (counts[j] == 0) continue;
@@ -447,12 +517,12 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
         else
             for (int i = 0; i < counts[j]; ++i) back[j][i] = trace(scene, next[j][i], depth + 1, opt, stats);
     }
-    for (int i = 0; i < count; ++i) {
-        const int k = shaded[i];
-        if (!has_secondary(s[k], depth, opt)) continue;
+    for (int j = 0; j < mixes; ++j) {
+        const int i = mixed[j], k = shaded[i];
         const Color<T> none{};
-        out[k] = mix_secondary(s[k], slot[0][k] >= 0 ? back[0][slot[0][k]] : none,
-                               slot[1][k] >= 0 ? back[1][slot[1][k]] : none);
+        out[k] =
+            mix_secondary(Lanes::shading(lanes, stride, std::size_t(i), *material[i]),
+                          slot[0][k] >= 0 ? back[0][slot[0][k]] : none, slot[1][k] >= 0 ? back[1][slot[1][k]] : none);
     }
 }
 } // namespace detail
