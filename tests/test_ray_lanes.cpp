@@ -306,3 +306,56 @@ TEST_CASE_TEMPLATE("ray lanes: hit_lanes is Möller–Trumbore and the §6 spher
         CHECK(a->moved == 0);
     }
 }
+
+TEST_CASE_TEMPLATE(
+    "ray lanes: assign holds each ray in its lane, zeros past them, and each largest direction component", T, float,
+    double) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<T> coord(T(-100), T(100));
+    std::vector<isin::Ray<T>> rays(80);
+    for (isin::Ray<T>& r : rays) r = {{coord(rng), coord(rng), coord(rng)}, {coord(rng), coord(rng), coord(rng)}};
+    rays[3].direction.y = -std::numeric_limits<T>::infinity();
+    rays[20].origin.z = std::numeric_limits<T>::quiet_NaN();
+    isin::RayLanes<T> lanes;
+    constexpr std::size_t B = isin::RayLanes<T>::block;
+    for (const std::size_t n : {std::size_t(0), std::size_t(1), B - 1, B, B + 1, 2 * B + 3, std::size_t(63),
+                                std::size_t(64), std::size_t(80)}) {
+        for (const std::size_t first : {std::size_t(0), std::size_t(1)}) { // whole registers at any address
+            CAPTURE(n);
+            CAPTURE(first);
+            const std::size_t count = std::min(n, rays.size() - first);
+            lanes.assign(rays.data() + first, count);
+            CHECK(lanes.count == std::min(count, isin::RayLanes<T>::capacity));
+            CHECK(lanes.padded % B == 0);
+            CHECK(lanes.padded >= lanes.count);
+            CHECK(lanes.padded < lanes.count + B);
+            bool same = true, zeros = true;
+            for (std::size_t k = 0; k < lanes.padded; ++k) {
+                const T got[6] = {lanes.ox[k], lanes.oy[k], lanes.oz[k], lanes.dx[k], lanes.dy[k], lanes.dz[k]};
+                if (k < lanes.count) {
+                    const isin::Ray<T>& r = rays[first + k];
+                    const T want[6] = {r.origin.x, r.origin.y, r.origin.z, r.direction.x, r.direction.y, r.direction.z};
+                    same = same && std::memcmp(got, want, sizeof got) == 0;
+                    using std::max;
+                    same =
+                        same && lanes.dmax[k] == max(max(std::fabs(want[3]), std::fabs(want[4])), std::fabs(want[5]));
+                } else {
+                    for (const T g : got) zeros = zeros && g == T(0);
+                    zeros = zeros && lanes.dmax[k] == T(0);
+                }
+            }
+            CHECK(same);
+            CHECK(zeros);
+            // assign_with, for rays given one by one: the same lanes
+            isin::RayLanes<T> other;
+            other.assign_with([&](std::size_t k) { return rays[first + k]; }, count);
+            CHECK(other.count == lanes.count);
+            CHECK(other.padded == lanes.padded);
+            const auto bytes = lanes.padded * sizeof(T);
+            CHECK((std::memcmp(other.ox, lanes.ox, bytes) == 0 && std::memcmp(other.oy, lanes.oy, bytes) == 0 &&
+                   std::memcmp(other.oz, lanes.oz, bytes) == 0 && std::memcmp(other.dx, lanes.dx, bytes) == 0 &&
+                   std::memcmp(other.dy, lanes.dy, bytes) == 0 && std::memcmp(other.dz, lanes.dz, bytes) == 0 &&
+                   std::memcmp(other.dmax, lanes.dmax, bytes) == 0));
+        }
+    }
+}

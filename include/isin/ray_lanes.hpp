@@ -56,21 +56,36 @@ struct RayLanes {
     alignas(64) T dx[capacity], dy[capacity], dz[capacity];
     alignas(64) T dmax[capacity]; ///< max |Rd| component
 
-    /// Holds rays[0 … n) (n is cut to capacity).
-    template <class RayAt>
-    void assign_with(const RayAt& ray_at, std::size_t n) noexcept {
+    /// Holds rays[0 … n) (n is cut to capacity); lanes past them hold zeros.
+    void assign(const Ray<T>* rays, std::size_t n) noexcept {
         count = std::min(n, capacity);
         padded = (count + block - 1) / block * block;
-        for (std::size_t k = 0; k < padded; ++k) {
-            const Ray<T> r = k < count ? ray_at(k) : Ray<T>{{T(0), T(0), T(0)}, {T(0), T(0), T(0)}};
-            ox[k] = r.origin.x, oy[k] = r.origin.y, oz[k] = r.origin.z;
-            dx[k] = r.direction.x, dy[k] = r.direction.y, dz[k] = r.direction.z;
-            using std::max;
-            dmax[k] = max(max(std::fabs(dx[k]), std::fabs(dy[k])), std::fabs(dz[k]));
+        std::size_t k = 0;
+#if defined(__AVX512F__) && !defined(ISIN_FORCE_PURE)
+        // whole registers of rays transposed in registers (avx512.hpp), rays being six T each
+        static_assert(sizeof(Ray<T>) == 6 * sizeof(T) && block * sizeof(T) == 64, "transpose6's layout");
+        for (; k + block <= count; k += block) {
+            T* const out[6] = {ox + k, oy + k, oz + k, dx + k, dy + k, dz + k};
+            detail::transpose6(&rays[k].origin.x, out);
         }
+#endif
+        for (; k < count; ++k) {
+            ox[k] = rays[k].origin.x, oy[k] = rays[k].origin.y, oz[k] = rays[k].origin.z;
+            dx[k] = rays[k].direction.x, dy[k] = rays[k].direction.y, dz[k] = rays[k].direction.z;
+        }
+        for (; k < padded; ++k) ox[k] = oy[k] = oz[k] = dx[k] = dy[k] = dz[k] = T(0);
+        using std::max;
+        for (std::size_t i = 0; i < padded; ++i)
+            dmax[i] = max(max(std::fabs(dx[i]), std::fabs(dy[i])), std::fabs(dz[i]));
     }
-    void assign(const Ray<T>* rays, std::size_t n) noexcept {
-        assign_with([rays](std::size_t k) { return rays[k]; }, n);
+
+    /// Holds ray_at(0 … n) (n is cut to capacity), for rays that are not an array of Ray.
+    template <class RayAt>
+    void assign_with(const RayAt& ray_at, std::size_t n) noexcept {
+        Ray<T> rays[capacity];
+        count = std::min(n, capacity);
+        for (std::size_t k = 0; k < count; ++k) rays[k] = ray_at(k);
+        assign(rays, count);
     }
 
     /// A lane's flag where there are no registers of lanes: an integer as wide as T, so that the

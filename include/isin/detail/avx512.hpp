@@ -26,6 +26,47 @@ inline void store_halves(__m512 v, float* lo, float* hi) noexcept {
 }
 #endif
 
+/// Six registers of W = 64 / sizeof(T) lanes from W records of six T at `p` (rays: origin x, y,
+/// z, direction x, y, z): out[c] lane j = p[6j + c]. Component c of record j sits in the pair of
+/// loaded registers (2q, 2q + 1) with q = (6j + c) / (2W), at (6j + c) mod 2W: one two-register
+/// permute per pair, blended by pair.
+inline void transpose6(const float* p, float* const (&out)[6]) noexcept {
+    __m512 a[6];
+    for (int i = 0; i < 6; ++i) a[i] = _mm512_loadu_ps(p + 16 * i);
+    for (int c = 0; c < 6; ++c) {
+        alignas(64) int index[16];
+        unsigned mid = 0, high = 0;
+        for (int j = 0; j < 16; ++j) {
+            const int at = 6 * j + c;
+            index[j] = at & 31;
+            mid |= unsigned(at >> 5 == 1) << j, high |= unsigned(at >> 5 == 2) << j;
+        }
+        const __m512i idx = _mm512_load_si512(index);
+        __m512 r = _mm512_permutex2var_ps(a[0], idx, a[1]);
+        r = _mm512_mask_blend_ps(__mmask16(mid), r, _mm512_permutex2var_ps(a[2], idx, a[3]));
+        r = _mm512_mask_blend_ps(__mmask16(high), r, _mm512_permutex2var_ps(a[4], idx, a[5]));
+        _mm512_storeu_ps(out[c], r);
+    }
+}
+inline void transpose6(const double* p, double* const (&out)[6]) noexcept {
+    __m512d a[6];
+    for (int i = 0; i < 6; ++i) a[i] = _mm512_loadu_pd(p + 8 * i);
+    for (int c = 0; c < 6; ++c) {
+        alignas(64) long long index[8];
+        unsigned mid = 0, high = 0;
+        for (int j = 0; j < 8; ++j) {
+            const int at = 6 * j + c;
+            index[j] = at & 15;
+            mid |= unsigned(at >> 4 == 1) << j, high |= unsigned(at >> 4 == 2) << j;
+        }
+        const __m512i idx = _mm512_load_si512(index);
+        __m512d r = _mm512_permutex2var_pd(a[0], idx, a[1]);
+        r = _mm512_mask_blend_pd(__mmask8(mid), r, _mm512_permutex2var_pd(a[2], idx, a[3]));
+        r = _mm512_mask_blend_pd(__mmask8(high), r, _mm512_permutex2var_pd(a[4], idx, a[5]));
+        _mm512_storeu_pd(out[c], r);
+    }
+}
+
 } // namespace detail
 } // namespace isin
 #endif
