@@ -6,7 +6,9 @@
 #include "approx.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <random>
 
 TEST_CASE_TEMPLATE("§7 example 7a: L = (0,0.8,−0.6), coefficient 0.8, red (255,0,0) → (204,0,0)", T, float, double) {
     const isin::Vertex<T> light{0, 40, 0}, N{0, 1, 0}, P{0, 0, 30};
@@ -116,4 +118,32 @@ TEST_CASE_TEMPLATE("to_byte: [0,1] to 0…255 rounded to nearest; out of range c
     CHECK(isin::to_byte(nan) == 0);
     CHECK(isin::to_byte(-nan) == 0);
     CHECK(isin::to_rgb8(isin::Color<T>{T(0.5), T(2), nan}) == isin::Rgb8{128, 255, 0});
+}
+
+TEST_CASE_TEMPLATE("§7 specular_power is std::pow bit for bit, also where cos^shininess underflows (no pow there)", T,
+                   float, double) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<T> exponent(T(-160), T(0)), shine(T(0), T(400));
+    const T tiny = std::numeric_limits<T>::denorm_min();
+    int same = 0, zeros = 0, subnormal = 0, n = 0;
+    const auto check = [&](T c, T s) {
+        const T want = c > T(0) ? std::pow(c, s) : T(0), got = isin::specular_power(c, s);
+        same += std::memcmp(&want, &got, sizeof got) == 0, ++n;
+        zeros += got == T(0) && c > T(0);
+        subnormal += got > T(0) && got < std::numeric_limits<T>::min();
+    };
+    for (int i = 0; i < 200000; ++i) check(std::exp2(exponent(rng)), shine(rng));
+    // around the shortcut's edge: c^s near the smallest subnormal and a quarter of it
+    const T edge = T(std::numeric_limits<T>::min_exponent - std::numeric_limits<T>::digits); // log2 of denorm_min
+    for (int i = 0; i < 20000; ++i) {
+        const T s = T(1) + shine(rng), target = edge + T(4) * (exponent(rng) / T(160) + T(0.5)); // ±2 around it
+        check(std::exp2(target / s), s);
+    }
+    for (const T c : {tiny, T(2) * tiny, std::numeric_limits<T>::min(), T(0.5), T(1), T(0), -T(0.5)})
+        for (const T s :
+             {T(0), T(1), T(2), T(40), std::numeric_limits<T>::infinity(), std::numeric_limits<T>::quiet_NaN()})
+            check(c, s);
+    CHECK(same == n);
+    CHECK(zeros > 1000); // the shortcut's cases were met, and pow's subnormal results beside them
+    CHECK(subnormal > 100);
 }

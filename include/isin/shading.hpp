@@ -2,7 +2,11 @@
 /// isin — Phong shading (note §7), refraction by Snell's law (§8), materials and lights.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <optional>
+#include <type_traits>
 
 #include "color.hpp"
 #include "texture.hpp"
@@ -59,7 +63,20 @@ template <class T>
 /// mirrored light direction and the eye's; 0 where c ≤ 0 (the highlight faces away) or is NaN.
 template <class T>
 [[nodiscard]] inline T specular_power(T c, T shininess) noexcept {
-    return c > T(0) ? std::pow(c, shininess) : T(0); // §7: cos^shininess
+    if (!(c > T(0))) return T(0);
+    // c < 2^b from c's exponent bits; where b·shininess ≤ −(the smallest subnormal's exponent + 3),
+    // c^shininess is below a quarter of the smallest subnormal, which std::pow (error < 1 ulp)
+    // rounds to 0: the same 0 without pow's underflow path (errno, a slow call per dark lane).
+    if constexpr (std::numeric_limits<T>::is_iec559 && (sizeof(T) == 4 || sizeof(T) == 8)) {
+        using Bits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
+        constexpr int mantissa = std::numeric_limits<T>::digits - 1, bias = std::numeric_limits<T>::max_exponent - 1;
+        constexpr T never = T(std::numeric_limits<T>::min_exponent - mantissa - 4); // −152 (float), −1077 (double)
+        Bits bits;
+        std::memcpy(&bits, &c, sizeof c);
+        const int b = int(bits >> mantissa) - bias + 1; // c < 2^b (also for subnormal c)
+        if (T(b) * shininess <= never) return T(0);
+    }
+    return std::pow(c, shininess); // §7: cos^shininess
 }
 
 /// Specular coefficient (§7): reflect the light-to-surface direction −L about N
