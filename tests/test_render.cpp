@@ -723,3 +723,52 @@ TEST_CASE_TEMPLATE(
     CHECK(entering < int(N) - 10);
     CHECK(lifted > 10);
 }
+
+TEST_CASE_TEMPLATE("hit_into_lanes and triangle_pass: Scene::surface's point, bound and normals, bit for bit, in any lane",
+                   T, float, double) {
+    using Lanes = isin::detail::ShadingLanes<T>;
+    constexpr std::size_t W = Lanes::width, N = 64;
+    isin::Scene<T, isin::Sphere, isin::Triangle, isin::TexturedTriangle> scene;
+    const auto m = scene.add_material({});
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<T> coord(T(-20), T(20));
+    const auto point = [&] { return isin::Vertex<T>{coord(rng), coord(rng), T(40) + coord(rng)}; };
+    for (int i = 0; i < 6; ++i) scene.add(isin::Triangle<T>{point(), point(), point()}, m);
+    for (int i = 0; i < 4; ++i) scene.add(isin::TexturedTriangle<T>{{point(), point(), point()}, i % 2 == 1}, m);
+    scene.add(isin::Sphere<T>{{T(0), T(0), T(20)}, T(5)}, m); // in front of most triangles
+    std::vector<isin::Ray<T>> rays;
+    std::vector<isin::Hit<T>> hits;
+    for (int tries = 0; rays.size() < N && tries < 100000; ++tries) { // rays from the eye that hit
+        const T spread = tries % 4 == 0 ? T(0.2) : T(1); // a quarter of the rays towards the sphere
+        const isin::Ray<T> r{{T(0), T(0), T(0)},
+                             isin::normalize(isin::Vertex<T>{spread * coord(rng), spread * coord(rng), T(40)})};
+        const isin::Hit<T> h = scene.intersect(r);
+        if (h) rays.push_back(r), hits.push_back(h);
+    }
+    REQUIRE(rays.size() == N);
+    alignas(64) T lanes[Lanes::rows * N];
+    for (std::size_t k = 0; k < N; ++k) isin::detail::hit_into_lanes(scene, rays[k], hits[k], lanes, N, k);
+    for (std::size_t k = 0; k < N; k += W) isin::detail::triangle_pass(lanes + k, N);
+    int same = 0, triangles = 0;
+    const auto bits_equal = [](const isin::Vertex<T>& a, const isin::Vertex<T>& b) {
+        return std::memcmp(&a, &b, sizeof a) == 0;
+    };
+    for (std::size_t k = 0; k < N; ++k) {
+        const isin::SurfacePoint<T> sp = scene.surface(rays[k], hits[k]);
+        triangles += hits[k].geometry != 0;
+        const auto matches = [&](const T* at, std::size_t stride, std::size_t i) {
+            return bits_equal(Lanes::vertex(at, stride, i, Lanes::px), sp.point) &&
+                   bits_equal(Lanes::vertex(at, stride, i, Lanes::ex), sp.error) &&
+                   bits_equal(Lanes::vertex(at, stride, i, Lanes::gx), sp.normal) &&
+                   bits_equal(Lanes::vertex(at, stride, i, Lanes::nx), sp.shading_normal) &&
+                   bits_equal(Lanes::vertex(at, stride, i, Lanes::hx), sp.shading_point);
+        };
+        T one[Lanes::rows]; // the same hit alone, as trace() shades it
+        isin::detail::hit_into_lanes(scene, rays[k], hits[k], one, 1, 0);
+        isin::detail::triangle_pass<T, T>(one, 1);
+        same += matches(lanes, N, k) && matches(one, 1, 0);
+    }
+    CHECK(same == int(N));
+    CHECK(triangles > 20); // both kinds of hit were met
+    CHECK(triangles < int(N) - 3);
+}

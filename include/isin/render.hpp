@@ -107,7 +107,7 @@ struct Shading {
 };
 
 // A stream's shaded points as lanes (trace()'s one point as one lane): lane k of field f is at
-// lanes[f·stride + k]. Each hit's surface is written into its lane (surface_into_lanes), then
+// lanes[f·stride + k]. Each hit's surface is written into its lane (hit_into_lanes, triangle_pass), then
 // side_pass turns the normals to the ray's side and places the secondary rays' origins, and the
 // light passes add each light's Phong terms (§7). The renderer's streams (up to stream_rays
 // points) run the passes a register of lanes at a time (lane_pack.hpp), trace() on its one
@@ -137,6 +137,10 @@ struct ShadingLanes : LaneRegister<T> {
     enum PerLight : std::size_t { lx, ly, lz, n_dot_l, visible, per_light };
     static constexpr std::size_t slots = 4; // lights at a time
     static constexpr std::size_t rows = fields + slots * per_light;
+    // triangle_pass's input, in the light slots' rows (the lights come after it): the vertices
+    // V0, V1, V2 (x y z each) and barycentrics of a triangle hit, and 1 where the lane holds one.
+    enum TriangleField : std::size_t { v0x = fields, tu = fields + 9, tv, is_triangle, triangle_end };
+    static_assert(triangle_end <= rows, "triangle_pass's rows fit the light slots'");
     // Field f of light slot `slot`.
     static constexpr std::size_t field(std::size_t slot, PerLight f) noexcept { return fields + slot * per_light + f; }
 
@@ -182,25 +186,19 @@ struct ShadingLanes : LaneRegister<T> {
     }
 };
 
-// The surface of `ray`'s hit into lane k: point and error, normals, the ray's direction, the
-// material's Phong weights, the surface's colour (texture or material, times the vertex colour)
-// and its ambient term (§7). Returns the material.
+// The material, colour and ray of a hit into lane k: the material's Phong weights, the surface's
+// colour (the texture at st where it has one, else the material's, times the vertex colour
+// `tint`), its ambient term (§7), and the ray's direction. Returns the material.
 template <class T, template <class> class... S>
-const Material<T>& surface_into_lanes(const Scene<T, S...>& scene, const Ray<T>& ray, const Hit<T>& hit, T* lanes,
-                                      std::size_t stride, std::size_t k) {
+const Material<T>& colour_into_lanes(const Scene<T, S...>& scene, std::uint32_t material, bool has_st,
+                                     const std::array<T, 2>& st, const Color<T>& tint, const Ray<T>& ray, T* lanes,
+                                     std::size_t stride, std::size_t k) {
     using Lanes = ShadingLanes<T>;
-    const SurfacePoint<T> sp = scene.surface(ray, hit);
-    const Material<T>& m = scene.material(sp.material);
-    const Color<T> object = sp.tint * (m.texture >= 0 && sp.has_texture_coordinates
-                                           ? sample(scene.texture(m.texture), sp.st[0], sp.st[1],
-                                                    m.texture_filter.value_or(scene.texture_filter))
-                                           : m.color);
+    const Material<T>& m = scene.material(material);
+    const Color<T> object = tint * (m.texture >= 0 && has_st ? sample(scene.texture(m.texture), st[0], st[1],
+                                                                      m.texture_filter.value_or(scene.texture_filter))
+                                                             : m.color);
     const Color<T> ambient = m.ka * m.ambient_color * object * scene.ambient_light; // §7: ambient
-    Lanes::set(lanes, stride, k, Lanes::px, sp.point);
-    Lanes::set(lanes, stride, k, Lanes::ex, sp.error);
-    Lanes::set(lanes, stride, k, Lanes::gx, sp.normal);
-    Lanes::set(lanes, stride, k, Lanes::nx, sp.shading_normal);
-    Lanes::set(lanes, stride, k, Lanes::hx, sp.shading_point);
     Lanes::set(lanes, stride, k, Lanes::vx, ray.direction);
     lanes[Lanes::kd * stride + k] = m.kd, lanes[Lanes::ks * stride + k] = m.ks;
     lanes[Lanes::shininess * stride + k] = m.shininess;
@@ -208,6 +206,63 @@ const Material<T>& surface_into_lanes(const Scene<T, S...>& scene, const Ray<T>&
     Lanes::set(lanes, stride, k, Lanes::sr, m.specular_color);
     Lanes::set(lanes, stride, k, Lanes::lr, ambient);
     return m;
+}
+
+// `ray`'s hit into lane k: on the scene's own triangle kinds its vertices and barycentrics, whose
+// surface triangle_pass computes a register at a time (as Scene::surface does:
+// triangle_surface); on anything else its surface from Scene::surface. Then its material and
+// colour (colour_into_lanes). Returns the material.
+template <class T, template <class> class... S>
+ISIN_DETAIL_NOINLINE const Material<T>& hit_into_lanes(const Scene<T, S...>& scene, const Ray<T>& ray,
+                                                       const Hit<T>& hit, T* lanes, std::size_t stride, std::size_t k) {
+    using Lanes = ShadingLanes<T>;
+    const Material<T>* m = nullptr;
+    scene.for_each_kind([&](auto kind, const auto& vec) {
+        using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
+        if constexpr (is_triangle_kind<Shape>::value) {
+            if (kind != hit.geometry) return;
+            const auto& obj = vec.at(hit.primitive);
+            const std::array<T, 9> v = vertices_of(*triangle_of(obj.shape));
+            for (std::size_t f = 0; f < 9; ++f) lanes[(Lanes::v0x + f) * stride + k] = v[f];
+            lanes[Lanes::tu * stride + k] = hit.u, lanes[Lanes::tv * stride + k] = hit.v;
+            lanes[Lanes::is_triangle * stride + k] = T(1);
+            std::array<T, 2> st{};
+            const bool has_st = texture_coordinates(obj.shape, hit, st);
+            m = &colour_into_lanes(scene, obj.material, has_st, st, {T(1), T(1), T(1)}, ray, lanes, stride, k);
+        }
+    });
+    if (m) return *m;
+    const SurfacePoint<T> sp = scene.surface(ray, hit);
+    for (std::size_t f = Lanes::v0x; f <= Lanes::is_triangle; ++f) lanes[f * stride + k] = T(0);
+    Lanes::set(lanes, stride, k, Lanes::px, sp.point);
+    Lanes::set(lanes, stride, k, Lanes::ex, sp.error);
+    Lanes::set(lanes, stride, k, Lanes::gx, sp.normal);
+    Lanes::set(lanes, stride, k, Lanes::nx, sp.shading_normal);
+    Lanes::set(lanes, stride, k, Lanes::hx, sp.shading_point);
+    return colour_into_lanes(scene, sp.material, sp.has_texture_coordinates, sp.st, sp.tint, ray, lanes, stride, k);
+}
+
+// For the register of lanes at p (or the one point at p, V = T): the surface of the lanes that
+// hold triangle hits (hit_into_lanes), as Scene::surface computes it (triangle_surface): the
+// point and its bound, the unit normal, which is also the shading normal, and the point, which
+// is also the shading point.
+template <class T, class V = typename LaneRegister<T>::V>
+ISIN_DETAIL_NOINLINE void triangle_pass(T* p, std::size_t stride) noexcept {
+    using Lanes = ShadingLanes<T>;
+    const auto at = [&](std::size_t f) { return load_lanes<T, V>(p + f * stride); };
+    const auto triangle = at(Lanes::is_triangle) != T(0);
+    if (lane_bits(triangle) == 0) return;
+    const std::size_t t = Lanes::v0x;
+    const V v[9] = {at(t), at(t + 1), at(t + 2), at(t + 3), at(t + 4), at(t + 5), at(t + 6), at(t + 7), at(t + 8)};
+    V point[3] = {v[0], v[0], v[0]}, error[3] = {v[0], v[0], v[0]}, normal[3] = {v[0], v[0], v[0]};
+    triangle_surface<T>(v, at(Lanes::tu), at(Lanes::tv), point, error, normal);
+    const auto put = [&](std::size_t f, const V& value) {
+        store_lanes(select(triangle, value, at(f)), p + f * stride);
+    };
+    for (std::size_t c = 0; c < 3; ++c) {
+        put(Lanes::px + c, point[c]), put(Lanes::hx + c, point[c]), put(Lanes::ex + c, error[c]);
+        put(Lanes::gx + c, normal[c]), put(Lanes::nx + c, normal[c]);
+    }
 }
 
 // For the register of lanes at p (V = LaneRegister's) or the one point at p (V = T): the
@@ -327,7 +382,8 @@ template <class T, template <class> class... S>
     // (the same bits): its surface and sides, then the lights one at a time.
     using Lanes = detail::ShadingLanes<T>;
     T lanes[Lanes::rows];
-    const Material<T>& m = detail::surface_into_lanes(scene, ray, sh, lanes, 1, 0);
+    const Material<T>& m = detail::hit_into_lanes(scene, ray, sh, lanes, 1, 0);
+    detail::triangle_pass<T, T>(lanes, 1);
     detail::side_pass<T, T>(lanes, 1);
     const Vertex<T> from = Lanes::vertex(lanes, 1, 0, Lanes::hx); // where shadow rays start
     const T& n_dot_l = lanes[Lanes::field(0, Lanes::n_dot_l)];
@@ -442,12 +498,12 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
             out[k] = scene.background;
             continue;
         }
-        material[count] = &surface_into_lanes(scene, rays[k], hits[k], lanes, stride, std::size_t(count));
+        material[count] = &hit_into_lanes(scene, rays[k], hits[k], lanes, stride, std::size_t(count));
         shaded[count++] = k;
     }
     const std::size_t padded = (std::size_t(count) + W - 1) / W * W;
     for (std::size_t k = std::size_t(count); k < padded; ++k) Lanes::clear(lanes, stride, k);
-    for (std::size_t k = 0; k < padded; k += W) side_pass(lanes + k, stride);
+    for (std::size_t k = 0; k < padded; k += W) triangle_pass(lanes + k, stride), side_pass(lanes + k, stride);
     // §7, §9: the lights' terms, up to `slots` lights at a time, as many as fit their shadow rays
     // in one stream.
     const T* from[3] = {lanes + Lanes::hx * stride, lanes + Lanes::hy * stride, lanes + Lanes::hz * stride};

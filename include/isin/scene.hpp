@@ -641,14 +641,22 @@ public:
         }
         for_each_kind([&](auto kind, const auto& vec) {
             if (kind != hit.geometry) return;
+            using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
             const auto& obj = vec.at(hit.primitive);
-            const BoundedPoint<T> p = hit_point(ray, obj.shape, hit);
-            // component by component: g++ stored p float by float and copied it 8 bytes at a
-            // time, a store-forwarding stall per hit (a fifth of the note's scene's shading)
-            sp.point.x = p.point.x, sp.point.y = p.point.y, sp.point.z = p.point.z;
-            sp.error.x = p.error.x, sp.error.y = p.error.y, sp.error.z = p.error.z;
+            if constexpr (is_triangle_kind<Shape>::value) { // what the renderer computes in lanes
+                T p[3], e[3], n[3];
+                detail::triangle_surface<T, T>(detail::vertices_of(*triangle_of(obj.shape)).data(), hit.u, hit.v, p, e,
+                                               n);
+                sp.point = {p[0], p[1], p[2]}, sp.error = {e[0], e[1], e[2]}, sp.normal = {n[0], n[1], n[2]};
+            } else {
+                const BoundedPoint<T> p = hit_point(ray, obj.shape, hit);
+                // component by component: g++ stored p float by float and copied it 8 bytes at a
+                // time, a store-forwarding stall per hit (a fifth of the note's scene's shading)
+                sp.point.x = p.point.x, sp.point.y = p.point.y, sp.point.z = p.point.z;
+                sp.error.x = p.error.x, sp.error.y = p.error.y, sp.error.z = p.error.z;
+                sp.normal = surface_normal(ray, obj.shape, sp.point, hit);
+            }
             sp.shading_point = sp.point;
-            sp.normal = surface_normal(ray, obj.shape, sp.point, hit);
             sp.shading_normal = sp.normal;
             sp.material = obj.material;
             sp.has_texture_coordinates = texture_coordinates(obj.shape, hit, sp.st);

@@ -2,10 +2,12 @@
 /// isin — triangles: the normal of note §2 and the ray–triangle tests of §4 (area test) and §10
 /// (Möller–Trumbore).
 #include <algorithm>
+#include <array>
 #include <limits>
 #include <utility>
 
 #include "detail/attributes.hpp"
+#include "detail/lane_pack.hpp"
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "ray.hpp"
@@ -246,20 +248,76 @@ template <class T>
 ///   conservative t > 0 to its test instead (§6.8.7), which here cost 20–40% of the Bvh's speed;
 ///   the margin matters only where |P| is below the triangle's size (near the origin).
 namespace detail {
+// The formulas below run on one value (V = T) or a register of lanes (V = lane_pack.hpp's), with
+// the same roundings in both: maxima as std::max(a, b) (a < b ? b : a, no NaN checks: one maxss
+// each, no branches), products added through lane_fma.
+template <class T, class V>
+ISIN_DETAIL_INLINE V larger_of(const V& a, const V& b) noexcept {
+    return select(a < b, b, a);
+}
+template <class T, class V>
+ISIN_DETAIL_INLINE V largest_magnitude(const V& x, const V& y, const V& z) noexcept {
+    return larger_of<T>(larger_of<T>(lane_abs(x), lane_abs(y)), lane_abs(z));
+}
+/// The triangle test's margin of hit_point's bound, γ₃₂·L³/|N|∞ (L the longest edge in max norm),
+/// from the edges V1 − V0, V2 − V0, V2 − V1 and |N|∞ of the §2 normal: the triangle's alone. A
+/// NaN (0/0 from a triangle shrunk to a point, whose point is then exact) leaves the own bound.
+template <class T, class V>
+ISIN_DETAIL_INLINE V triangle_test_margin(const V (&e1)[3], const V (&e2)[3], const V (&e3)[3],
+                                          const V& largest_N) noexcept {
+    const V L =
+        larger_of<T>(larger_of<T>(largest_magnitude<T>(e1[0], e1[1], e1[2]), largest_magnitude<T>(e2[0], e2[1], e2[2])),
+                     largest_magnitude<T>(e3[0], e3[1], e3[2]));
+    return V(rounding_gamma<T>(32)) * L * (L * L / largest_N); // γ₃₂·L³/|N|∞
+}
+/// hit_point's point and bound from the vertices v (V0, V1, V2, x y z each) and barycentrics u, w:
+/// P = b0·V0 + b1·V1 + b2·V2 (b1 = u, b2 = w, b0 = 1 − u − w), and per component the larger of
+/// γ₇·(|b0·V0| + |b1·V1| + |b2·V2|) (pbrt-v4 §6.8.5) and the test margin.
+template <class T, class V>
+ISIN_DETAIL_INLINE void barycentric_point(const V* v, const V& u, const V& w, const V& margin, V (&p)[3],
+                                          V (&error)[3]) noexcept {
+    const V b0 = V(T(1)) - u - w;
+    for (int c = 0; c < 3; ++c) {
+        const V p0 = b0 * v[c], p1 = u * v[3 + c], p2 = w * v[6 + c];
+        p[c] = p0 + p1 + p2;
+        const V own = V(rounding_gamma<T>(7)) * (lane_abs(p0) + lane_abs(p1) + lane_abs(p2));
+        error[c] = larger_of<T>(own, margin);
+    }
+}
+/// The vertices V0, V1, V2 as nine values, x y z each.
+template <class T>
+[[nodiscard]] ISIN_DETAIL_INLINE std::array<T, 9> vertices_of(const Triangle<T>& tri) noexcept {
+    return {{tri.v0.x, tri.v0.y, tri.v0.z, tri.v1.x, tri.v1.y, tri.v1.z, tri.v2.x, tri.v2.y, tri.v2.z}};
+}
+/// A triangle hit's surface, for one value or a register of lanes: hit_point's point and bound
+/// (barycentric_point) and the unit §2 normal, normalize((V1 − V0) × (V2 − V0)).
+template <class T, class V>
+ISIN_DETAIL_INLINE void triangle_surface(const V* v, const V& u, const V& w, V (&p)[3], V (&error)[3],
+                                         V (&n)[3]) noexcept {
+    const V e1[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]};
+    const V e2[3] = {v[6] - v[0], v[7] - v[1], v[8] - v[2]};
+    const V e3[3] = {v[6] - v[3], v[7] - v[4], v[8] - v[5]};
+    n[0] = lane_cross_term(e1[1], e2[2], e1[2], e2[1]); // §2: N = (V1−V0) × (V2−V0)
+    n[1] = lane_cross_term(e1[2], e2[0], e1[0], e2[2]);
+    n[2] = lane_cross_term(e1[0], e2[1], e1[1], e2[0]);
+    barycentric_point<T>(v, u, w, triangle_test_margin<T>(e1, e2, e3, largest_magnitude<T>(n[0], n[1], n[2])), p,
+                         error);
+    lane_normalize<T>(n[0], n[1], n[2]);
+}
+
 /// hit_point's work, given the triangle's §2 normal N (callers that also need N compute it once).
 template <class T>
 [[nodiscard]] ISIN_DETAIL_INLINE BoundedPoint<T> triangle_hit_point(const Triangle<T>& tri, const Hit<T>& hit,
                                                                     const Vertex<T>& N) noexcept {
-    // Maxima by std::max, without max_of's NaN checks (one maxss each, no branches): a NaN margin
-    // (0/0 from a triangle shrunk to a point, whose point is then exact) leaves the own bound.
-    using std::max;
-    const auto largest = [](const Vertex<T>& a) { return max(max(std::fabs(a.x), std::fabs(a.y)), std::fabs(a.z)); };
-    const T b1 = hit.u, b2 = hit.v, b0 = T(1) - b1 - b2;
-    const Vertex<T> p0 = b0 * tri.v0, p1 = b1 * tri.v1, p2 = b2 * tri.v2;
-    const T L = max(max(largest(tri.v1 - tri.v0), largest(tri.v2 - tri.v0)), largest(tri.v2 - tri.v1));
-    const T test_margin = rounding_gamma<T>(32) * L * (L * L / largest(N));     // γ₃₂·L³/|N|∞
-    const Vertex<T> own = rounding_gamma<T>(7) * (abs(p0) + abs(p1) + abs(p2)); // pbrt-v4 §6.8.5: γ₇·Σ|bᵢ·Vᵢ|
-    return {p0 + p1 + p2, {max(own.x, test_margin), max(own.y, test_margin), max(own.z, test_margin)}};
+    const std::array<T, 9> vertices = vertices_of(tri);
+    const T* v = vertices.data();
+    const T e1[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]};
+    const T e2[3] = {v[6] - v[0], v[7] - v[1], v[8] - v[2]};
+    const T e3[3] = {v[6] - v[3], v[7] - v[4], v[8] - v[5]};
+    T p[3], error[3];
+    barycentric_point<T>(v, hit.u, hit.v, triangle_test_margin<T>(e1, e2, e3, largest_magnitude<T>(N.x, N.y, N.z)), p,
+                         error);
+    return {{p[0], p[1], p[2]}, {error[0], error[1], error[2]}};
 }
 } // namespace detail
 
