@@ -724,8 +724,9 @@ TEST_CASE_TEMPLATE(
     CHECK(lifted > 10);
 }
 
-TEST_CASE_TEMPLATE("hit_into_lanes and triangle_pass: Scene::surface's point, bound and normals, bit for bit, in any lane",
-                   T, float, double) {
+TEST_CASE_TEMPLATE(
+    "hit_into_lanes and surface_pass: Scene::surface's point, bound and normals, bit for bit, in any lane", T, float,
+    double) {
     using Lanes = isin::detail::ShadingLanes<T>;
     constexpr std::size_t W = Lanes::width, N = 64;
     isin::Scene<T, isin::Sphere, isin::Triangle, isin::TexturedTriangle> scene;
@@ -739,7 +740,7 @@ TEST_CASE_TEMPLATE("hit_into_lanes and triangle_pass: Scene::surface's point, bo
     std::vector<isin::Ray<T>> rays;
     std::vector<isin::Hit<T>> hits;
     for (int tries = 0; rays.size() < N && tries < 100000; ++tries) { // rays from the eye that hit
-        const T spread = tries % 4 == 0 ? T(0.2) : T(1); // a quarter of the rays towards the sphere
+        const T spread = tries % 4 == 0 ? T(0.2) : T(1);              // a quarter of the rays towards the sphere
         const isin::Ray<T> r{{T(0), T(0), T(0)},
                              isin::normalize(isin::Vertex<T>{spread * coord(rng), spread * coord(rng), T(40)})};
         const isin::Hit<T> h = scene.intersect(r);
@@ -748,7 +749,7 @@ TEST_CASE_TEMPLATE("hit_into_lanes and triangle_pass: Scene::surface's point, bo
     REQUIRE(rays.size() == N);
     alignas(64) T lanes[Lanes::rows * N];
     for (std::size_t k = 0; k < N; ++k) isin::detail::hit_into_lanes(scene, rays[k], hits[k], lanes, N, k);
-    for (std::size_t k = 0; k < N; k += W) isin::detail::triangle_pass(lanes + k, N);
+    for (std::size_t k = 0; k < N; k += W) isin::detail::surface_pass(lanes + k, N);
     int same = 0, triangles = 0;
     const auto bits_equal = [](const isin::Vertex<T>& a, const isin::Vertex<T>& b) {
         return std::memcmp(&a, &b, sizeof a) == 0;
@@ -765,7 +766,7 @@ TEST_CASE_TEMPLATE("hit_into_lanes and triangle_pass: Scene::surface's point, bo
         };
         T one[Lanes::rows]; // the same hit alone, as trace() shades it
         isin::detail::hit_into_lanes(scene, rays[k], hits[k], one, 1, 0);
-        isin::detail::triangle_pass<T, T>(one, 1);
+        isin::detail::surface_pass<T, T>(one, 1);
         same += matches(lanes, N, k) && matches(one, 1, 0);
     }
     CHECK(same == int(N));

@@ -107,7 +107,7 @@ struct Shading {
 };
 
 // A stream's shaded points as lanes (trace()'s one point as one lane): lane k of field f is at
-// lanes[f·stride + k]. Each hit's surface is written into its lane (hit_into_lanes, triangle_pass), then
+// lanes[f·stride + k]. Each hit's surface is written into its lane (hit_into_lanes, surface_pass), then
 // side_pass turns the normals to the ray's side and places the secondary rays' origins, and the
 // light passes add each light's Phong terms (§7). The renderer's streams (up to stream_rays
 // points) run the passes a register of lanes at a time (lane_pack.hpp), trace() on its one
@@ -137,10 +137,12 @@ struct ShadingLanes : LaneRegister<T> {
     enum PerLight : std::size_t { lx, ly, lz, n_dot_l, visible, per_light };
     static constexpr std::size_t slots = 4; // lights at a time
     static constexpr std::size_t rows = fields + slots * per_light;
-    // triangle_pass's input, in the light slots' rows (the lights come after it): the vertices
-    // V0, V1, V2 (x y z each) and barycentrics of a triangle hit, and 1 where the lane holds one.
-    enum TriangleField : std::size_t { v0x = fields, tu = fields + 9, tv, is_triangle, triangle_end };
-    static_assert(triangle_end <= rows, "triangle_pass's rows fit the light slots'");
+    // surface_pass's input, in the light slots' rows (the lights come after it): a triangle hit's
+    // vertices V0, V1, V2 (x y z each) and barycentrics, or a sphere hit's centre, radius, ray
+    // origin and t; and 1 in is_triangle or is_sphere where the lane holds one.
+    enum TriangleField : std::size_t { v0x = fields, tu = fields + 9, tv, is_triangle, is_sphere, primitive_end };
+    enum SphereField : std::size_t { cx = v0x, radius = v0x + 3, rox = v0x + 4, t = tu };
+    static_assert(primitive_end <= rows, "surface_pass's rows fit the light slots'");
     // Field f of light slot `slot`.
     static constexpr std::size_t field(std::size_t slot, PerLight f) noexcept { return fields + slot * per_light + f; }
 
@@ -208,10 +210,10 @@ const Material<T>& colour_into_lanes(const Scene<T, S...>& scene, std::uint32_t 
     return m;
 }
 
-// `ray`'s hit into lane k: on the scene's own triangle kinds its vertices and barycentrics, whose
-// surface triangle_pass computes a register at a time (as Scene::surface does:
-// triangle_surface); on anything else its surface from Scene::surface. Then its material and
-// colour (colour_into_lanes). Returns the material.
+// `ray`'s hit into lane k: on the scene's own triangle kinds its vertices and barycentrics, on its
+// spheres the sphere, the ray's origin and t, whose surface surface_pass computes a register at a
+// time (as Scene::surface does: triangle_surface, sphere_surface); on anything else its surface
+// from Scene::surface. Then its material and colour (colour_into_lanes). Returns the material.
 template <class T, template <class> class... S>
 ISIN_DETAIL_NOINLINE const Material<T>& hit_into_lanes(const Scene<T, S...>& scene, const Ray<T>& ray,
                                                        const Hit<T>& hit, T* lanes, std::size_t stride, std::size_t k) {
@@ -225,7 +227,19 @@ ISIN_DETAIL_NOINLINE const Material<T>& hit_into_lanes(const Scene<T, S...>& sce
             const std::array<T, 9> v = vertices_of(*triangle_of(obj.shape));
             for (std::size_t f = 0; f < 9; ++f) lanes[(Lanes::v0x + f) * stride + k] = v[f];
             lanes[Lanes::tu * stride + k] = hit.u, lanes[Lanes::tv * stride + k] = hit.v;
-            lanes[Lanes::is_triangle * stride + k] = T(1);
+            lanes[Lanes::is_triangle * stride + k] = T(1), lanes[Lanes::is_sphere * stride + k] = T(0);
+            std::array<T, 2> st{};
+            const bool has_st = texture_coordinates(obj.shape, hit, st);
+            m = &colour_into_lanes(scene, obj.material, has_st, st, {T(1), T(1), T(1)}, ray, lanes, stride, k);
+        } else if constexpr (std::is_same_v<Shape, Sphere<T>>) {
+            if (kind != hit.geometry) return;
+            const auto& obj = vec.at(hit.primitive);
+            Lanes::set(lanes, stride, k, Lanes::cx, obj.shape.center);
+            lanes[Lanes::radius * stride + k] = obj.shape.radius;
+            Lanes::set(lanes, stride, k, Lanes::rox, ray.origin);
+            for (std::size_t f = Lanes::rox + 3; f < Lanes::t; ++f) lanes[f * stride + k] = T(0);
+            lanes[Lanes::t * stride + k] = hit.t, lanes[Lanes::tv * stride + k] = T(0);
+            lanes[Lanes::is_triangle * stride + k] = T(0), lanes[Lanes::is_sphere * stride + k] = T(1);
             std::array<T, 2> st{};
             const bool has_st = texture_coordinates(obj.shape, hit, st);
             m = &colour_into_lanes(scene, obj.material, has_st, st, {T(1), T(1), T(1)}, ray, lanes, stride, k);
@@ -233,7 +247,7 @@ ISIN_DETAIL_NOINLINE const Material<T>& hit_into_lanes(const Scene<T, S...>& sce
     });
     if (m) return *m;
     const SurfacePoint<T> sp = scene.surface(ray, hit);
-    for (std::size_t f = Lanes::v0x; f <= Lanes::is_triangle; ++f) lanes[f * stride + k] = T(0);
+    for (std::size_t f = Lanes::v0x; f < Lanes::primitive_end; ++f) lanes[f * stride + k] = T(0);
     Lanes::set(lanes, stride, k, Lanes::px, sp.point);
     Lanes::set(lanes, stride, k, Lanes::ex, sp.error);
     Lanes::set(lanes, stride, k, Lanes::gx, sp.normal);
@@ -242,26 +256,37 @@ ISIN_DETAIL_NOINLINE const Material<T>& hit_into_lanes(const Scene<T, S...>& sce
     return colour_into_lanes(scene, sp.material, sp.has_texture_coordinates, sp.st, sp.tint, ray, lanes, stride, k);
 }
 
-// For the register of lanes at p (or the one point at p, V = T): the surface of the lanes that
-// hold triangle hits (hit_into_lanes), as Scene::surface computes it (triangle_surface): the
-// point and its bound, the unit normal, which is also the shading normal, and the point, which
-// is also the shading point.
+// For the register of lanes at p (or the one point at p, V = T): the surfaces of the lanes that
+// hold triangle or sphere hits (hit_into_lanes), as Scene::surface computes them
+// (triangle_surface, sphere_surface): the point and its bound, the unit normal, which is also
+// the shading normal, and the point, which is also the shading point.
 template <class T, class V = typename LaneRegister<T>::V>
-ISIN_DETAIL_NOINLINE void triangle_pass(T* p, std::size_t stride) noexcept {
+ISIN_DETAIL_NOINLINE void surface_pass(T* p, std::size_t stride) noexcept {
     using Lanes = ShadingLanes<T>;
     const auto at = [&](std::size_t f) { return load_lanes<T, V>(p + f * stride); };
-    const auto triangle = at(Lanes::is_triangle) != T(0);
-    if (lane_bits(triangle) == 0) return;
-    const std::size_t t = Lanes::v0x;
-    const V v[9] = {at(t), at(t + 1), at(t + 2), at(t + 3), at(t + 4), at(t + 5), at(t + 6), at(t + 7), at(t + 8)};
-    V point[3] = {v[0], v[0], v[0]}, error[3] = {v[0], v[0], v[0]}, normal[3] = {v[0], v[0], v[0]};
-    triangle_surface<T>(v, at(Lanes::tu), at(Lanes::tv), point, error, normal);
-    const auto put = [&](std::size_t f, const V& value) {
-        store_lanes(select(triangle, value, at(f)), p + f * stride);
+    const auto surface = [&](const auto& mask, const V(&point)[3], const V(&error)[3], const V(&normal)[3]) {
+        const auto put = [&](std::size_t f, const V& value) {
+            store_lanes(select(mask, value, at(f)), p + f * stride);
+        };
+        for (std::size_t c = 0; c < 3; ++c) {
+            put(Lanes::px + c, point[c]), put(Lanes::hx + c, point[c]), put(Lanes::ex + c, error[c]);
+            put(Lanes::gx + c, normal[c]), put(Lanes::nx + c, normal[c]);
+        }
     };
-    for (std::size_t c = 0; c < 3; ++c) {
-        put(Lanes::px + c, point[c]), put(Lanes::hx + c, point[c]), put(Lanes::ex + c, error[c]);
-        put(Lanes::gx + c, normal[c]), put(Lanes::nx + c, normal[c]);
+    const std::size_t s = Lanes::v0x;
+    const V v[9] = {at(s), at(s + 1), at(s + 2), at(s + 3), at(s + 4), at(s + 5), at(s + 6), at(s + 7), at(s + 8)};
+    V point[3] = {v[0], v[0], v[0]}, error[3] = {v[0], v[0], v[0]}, normal[3] = {v[0], v[0], v[0]};
+    const auto triangle = at(Lanes::is_triangle) != T(0);
+    if (lane_bits(triangle) != 0) {
+        triangle_surface<T>(v, at(Lanes::tu), at(Lanes::tv), point, error, normal);
+        surface(triangle, point, error, normal);
+    }
+    const auto sphere = at(Lanes::is_sphere) != T(0);
+    if (lane_bits(sphere) != 0) {
+        const V centre[3] = {v[0], v[1], v[2]}, origin[3] = {v[4], v[5], v[6]};
+        const V direction[3] = {at(Lanes::vx), at(Lanes::vy), at(Lanes::vz)}; // the ray's, before side_pass
+        sphere_surface<T>(origin, direction, centre, v[3], at(Lanes::t), point, error, normal);
+        surface(sphere, point, error, normal);
     }
 }
 
@@ -383,7 +408,7 @@ template <class T, template <class> class... S>
     using Lanes = detail::ShadingLanes<T>;
     T lanes[Lanes::rows];
     const Material<T>& m = detail::hit_into_lanes(scene, ray, sh, lanes, 1, 0);
-    detail::triangle_pass<T, T>(lanes, 1);
+    detail::surface_pass<T, T>(lanes, 1);
     detail::side_pass<T, T>(lanes, 1);
     const Vertex<T> from = Lanes::vertex(lanes, 1, 0, Lanes::hx); // where shadow rays start
     const T& n_dot_l = lanes[Lanes::field(0, Lanes::n_dot_l)];
@@ -503,7 +528,7 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
     }
     const std::size_t padded = (std::size_t(count) + W - 1) / W * W;
     for (std::size_t k = std::size_t(count); k < padded; ++k) Lanes::clear(lanes, stride, k);
-    for (std::size_t k = 0; k < padded; k += W) triangle_pass(lanes + k, stride), side_pass(lanes + k, stride);
+    for (std::size_t k = 0; k < padded; k += W) surface_pass(lanes + k, stride), side_pass(lanes + k, stride);
     // §7, §9: the lights' terms, up to `slots` lights at a time, as many as fit their shadow rays
     // in one stream.
     const T* from[3] = {lanes + Lanes::hx * stride, lanes + Lanes::hy * stride, lanes + Lanes::hz * stride};

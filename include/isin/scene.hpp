@@ -648,6 +648,8 @@ public:
                 detail::triangle_surface<T, T>(detail::vertices_of(*triangle_of(obj.shape)).data(), hit.u, hit.v, p, e,
                                                n);
                 sp.point = {p[0], p[1], p[2]}, sp.error = {e[0], e[1], e[2]}, sp.normal = {n[0], n[1], n[2]};
+            } else if constexpr (std::is_same_v<Shape, Sphere<T>>) { // hit_point and normal_at at once
+                detail::sphere_surface(ray, obj.shape, hit.t, &sp.point, &sp.error, &sp.normal);
             } else {
                 const BoundedPoint<T> p = hit_point(ray, obj.shape, hit);
                 // component by component: g++ stored p float by float and copied it 8 bytes at a

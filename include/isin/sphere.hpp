@@ -2,6 +2,8 @@
 /// isin — spheres and the geometric ray–sphere test of note §6.
 #include <limits>
 
+#include "detail/attributes.hpp"
+#include "detail/lane_pack.hpp"
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "ray.hpp"
@@ -31,15 +33,53 @@ template <class T>
 /// origin, P itself is rounded by a good part of the radius.
 template <class T>
 [[nodiscard]] inline Vertex<T> offset_from_center(const Ray<T>& ray, const Sphere<T>& sp, T t) noexcept {
-    return (ray.origin - sp.center) + t * ray.direction;
+    const Vertex<T> oc = ray.origin - sp.center;
+    return {detail::lane_fma(t, ray.direction.x, oc.x), detail::lane_fma(t, ray.direction.y, oc.y),
+            detail::lane_fma(t, ray.direction.z, oc.z)};
 }
+
+namespace detail {
+/// A sphere hit's surface for one value (V = T) or a register of lanes (lane_pack.hpp), rounded
+/// alike in both (lane_fma, lane_dot): from the ray's origin o and direction d, the sphere's
+/// centre c and radius r and the hit's t, the offset from the centre P − C = (o − c) + t·d
+/// (offset_from_center), the unit normal along it (normal_at), and hit_point's point
+/// C + r·(P − C)/|P − C| with its bound γ₅·|P − C| + γ₁·|P| (pbrt-v4 §6.8.5: reprojection).
+template <class T, class V>
+ISIN_DETAIL_INLINE void sphere_surface(const V (&o)[3], const V (&d)[3], const V (&c)[3], const V& r, const V& t,
+                                       V (&p)[3], V (&error)[3], V (&n)[3]) noexcept {
+    V pl[3] = {lane_fma(t, d[0], o[0] - c[0]), lane_fma(t, d[1], o[1] - c[1]), lane_fma(t, d[2], o[2] - c[2])};
+    const V scale = r / lane_sqrt(lane_dot(pl[0], pl[1], pl[2], pl[0], pl[1], pl[2])); // r / |P − C|
+    n[0] = pl[0], n[1] = pl[1], n[2] = pl[2];
+    lane_normalize<T>(n[0], n[1], n[2]);
+    for (int i = 0; i < 3; ++i) {
+        pl[i] = scale * pl[i]; // pbrt-v4: reproject onto the sphere
+        p[i] = c[i] + pl[i];
+        error[i] = lane_fma(V(rounding_gamma<T>(5)), lane_abs(pl[i]), V(rounding_gamma<T>(1)) * lane_abs(p[i]));
+    }
+}
+/// sphere_surface for one ray, sphere and t.
+template <class T>
+ISIN_DETAIL_INLINE void sphere_surface(const Ray<T>& ray, const Sphere<T>& sp, T t, Vertex<T>* point, Vertex<T>* error,
+                                       Vertex<T>* normal) noexcept {
+    const T o[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
+    const T d[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
+    const T c[3] = {sp.center.x, sp.center.y, sp.center.z};
+    T p[3], e[3], n[3];
+    sphere_surface<T, T>(o, d, c, sp.radius, t, p, e, n);
+    if (point) *point = {p[0], p[1], p[2]};
+    if (error) *error = {e[0], e[1], e[2]};
+    if (normal) *normal = {n[0], n[1], n[2]};
+}
+} // namespace detail
 
 /// Outward unit normal of the sphere where `ray` hits it: from offset_from_center, so that it is
 /// right to the eye's distance, not to |P| (normal_at(sp, P) is off by up to ulp(|C|)/r radians,
 /// enough to make a grazing ray look as if it came from inside a tiny far sphere).
 template <class T>
 [[nodiscard]] inline Vertex<T> normal_at(const Ray<T>& ray, const Sphere<T>& sp, const Hit<T>& hit) noexcept {
-    return normalize(offset_from_center(ray, sp, hit.t));
+    Vertex<T> n;
+    detail::sphere_surface<T>(ray, sp, hit.t, nullptr, nullptr, &n);
+    return n;
 }
 
 /// Bound on the error of a point that `hit_point` puts on the sphere: γ₅·r from the reprojection
@@ -69,10 +109,9 @@ template <class T>
 /// on how far the ray came from; restarting a ray from it, raw, is what `surface_band` expects.
 template <class T>
 [[nodiscard]] inline BoundedPoint<T> hit_point(const Ray<T>& ray, const Sphere<T>& sp, const Hit<T>& hit) noexcept {
-    Vertex<T> pl = offset_from_center(ray, sp, hit.t);
-    pl = (sp.radius / length(pl)) * pl; // pbrt-v4: reproject onto the sphere
-    const Vertex<T> P = sp.center + pl;
-    return {P, rounding_gamma<T>(5) * abs(pl) + rounding_gamma<T>(1) * abs(P)}; // γ₅|P − C| + γ₁|P|
+    BoundedPoint<T> p;
+    detail::sphere_surface<T>(ray, sp, hit.t, &p.point, &p.error, nullptr); // pbrt-v4: reproject onto the sphere
+    return p;
 }
 
 /// Geometric ray–sphere test of note §6, isin's default. Nearest hit with t > 0, t in units of
