@@ -221,25 +221,23 @@ ISIN_DETAIL_NOINLINE const Material<T>& hit_into_lanes(const Scene<T, S...>& sce
     const Material<T>* m = nullptr;
     scene.for_each_kind([&](auto kind, const auto& vec) {
         using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
-        if constexpr (is_triangle_kind<Shape>::value) {
+        constexpr bool triangle = is_triangle_kind<Shape>::value, sphere = std::is_same_v<Shape, Sphere<T>>;
+        if constexpr (triangle || sphere) {
             if (kind != hit.geometry) return;
             const auto& obj = vec.at(hit.primitive);
-            const std::array<T, 9> v = vertices_of(*triangle_of(obj.shape));
-            for (std::size_t f = 0; f < 9; ++f) lanes[(Lanes::v0x + f) * stride + k] = v[f];
-            lanes[Lanes::tu * stride + k] = hit.u, lanes[Lanes::tv * stride + k] = hit.v;
-            lanes[Lanes::is_triangle * stride + k] = T(1), lanes[Lanes::is_sphere * stride + k] = T(0);
-            std::array<T, 2> st{};
-            const bool has_st = texture_coordinates(obj.shape, hit, st);
-            m = &colour_into_lanes(scene, obj.material, has_st, st, {T(1), T(1), T(1)}, ray, lanes, stride, k);
-        } else if constexpr (std::is_same_v<Shape, Sphere<T>>) {
-            if (kind != hit.geometry) return;
-            const auto& obj = vec.at(hit.primitive);
-            Lanes::set(lanes, stride, k, Lanes::cx, obj.shape.center);
-            lanes[Lanes::radius * stride + k] = obj.shape.radius;
-            Lanes::set(lanes, stride, k, Lanes::rox, ray.origin);
-            for (std::size_t f = Lanes::rox + 3; f < Lanes::t; ++f) lanes[f * stride + k] = T(0);
-            lanes[Lanes::t * stride + k] = hit.t, lanes[Lanes::tv * stride + k] = T(0);
-            lanes[Lanes::is_triangle * stride + k] = T(0), lanes[Lanes::is_sphere * stride + k] = T(1);
+            if constexpr (triangle) {
+                const std::array<T, 9> v = vertices_of(*triangle_of(obj.shape));
+                for (std::size_t f = 0; f < 9; ++f) lanes[(Lanes::v0x + f) * stride + k] = v[f];
+                lanes[Lanes::tu * stride + k] = hit.u, lanes[Lanes::tv * stride + k] = hit.v;
+            } else {
+                Lanes::set(lanes, stride, k, Lanes::cx, obj.shape.center);
+                lanes[Lanes::radius * stride + k] = obj.shape.radius;
+                Lanes::set(lanes, stride, k, Lanes::rox, ray.origin);
+                for (std::size_t f = Lanes::rox + 3; f < Lanes::t; ++f) lanes[f * stride + k] = T(0);
+                lanes[Lanes::t * stride + k] = hit.t, lanes[Lanes::tv * stride + k] = T(0);
+            }
+            lanes[Lanes::is_triangle * stride + k] = triangle ? T(1) : T(0);
+            lanes[Lanes::is_sphere * stride + k] = sphere ? T(1) : T(0);
             std::array<T, 2> st{};
             const bool has_st = texture_coordinates(obj.shape, hit, st);
             m = &colour_into_lanes(scene, obj.material, has_st, st, {T(1), T(1), T(1)}, ray, lanes, stride, k);
@@ -472,9 +470,9 @@ bool has_secondary(const Material<T>& m, int depth, const RenderOptions& opt) no
 
 // The colour of a point with secondary rays: its local colour and what they brought back (§8).
 template <class T>
-Color<T> mix_secondary(const Shading<T>& s, const Color<T>& reflected, const Color<T>& transmitted) noexcept {
-    const Material<T>& m = *s.m;
-    Color<T> result = std::max(T(0), T(1) - m.reflectivity - m.transparency) * s.local;
+Color<T> mix_secondary(const Material<T>& m, const Color<T>& local, const Color<T>& reflected,
+                       const Color<T>& transmitted) noexcept {
+    Color<T> result = std::max(T(0), T(1) - m.reflectivity - m.transparency) * local;
     if (m.reflectivity > T(0)) result += m.reflectivity * reflected;
     if (m.transparency > T(0)) result += m.transparency * transmitted;
     return result;
@@ -489,7 +487,7 @@ Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shadi
     Color<T> reflected{}, transmitted{};
     if (next.reflects) reflected = trace(scene, next.reflected, depth + 1, opt, stats);
     if (next.transmits) transmitted = trace(scene, next.transmitted, depth + 1, opt, stats);
-    return mix_secondary(s, reflected, transmitted);
+    return mix_secondary(*s.m, s.local, reflected, transmitted);
 }
 
 // Secondary rays go as streams down to this depth, then one by one (trace()): each level keeps
@@ -602,7 +600,7 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
         const int i = mixed[j], k = shaded[i];
         const Color<T> none{};
         out[k] =
-            mix_secondary(Lanes::shading(lanes, stride, std::size_t(i), *material[i]),
+            mix_secondary(*material[i], Lanes::local(lanes, stride, std::size_t(i)),
                           slot[0][k] >= 0 ? back[0][slot[0][k]] : none, slot[1][k] >= 0 ? back[1][slot[1][k]] : none);
     }
 }

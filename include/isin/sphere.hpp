@@ -47,14 +47,13 @@ namespace detail {
 template <class T, class V>
 ISIN_DETAIL_INLINE void sphere_surface(const V (&o)[3], const V (&d)[3], const V (&c)[3], const V& r, const V& t,
                                        V (&p)[3], V (&error)[3], V (&n)[3]) noexcept {
-    V pl[3] = {lane_fma(t, d[0], o[0] - c[0]), lane_fma(t, d[1], o[1] - c[1]), lane_fma(t, d[2], o[2] - c[2])};
-    const V scale = r / lane_sqrt(lane_dot(pl[0], pl[1], pl[2], pl[0], pl[1], pl[2])); // r / |P − C|
+    const V pl[3] = {lane_fma(t, d[0], o[0] - c[0]), lane_fma(t, d[1], o[1] - c[1]), lane_fma(t, d[2], o[2] - c[2])};
     n[0] = pl[0], n[1] = pl[1], n[2] = pl[2];
-    lane_normalize<T>(n[0], n[1], n[2]);
+    const V scale = r / lane_normalize<T>(n[0], n[1], n[2]); // r / |P − C|
     for (int i = 0; i < 3; ++i) {
-        pl[i] = scale * pl[i]; // pbrt-v4: reproject onto the sphere
-        p[i] = c[i] + pl[i];
-        error[i] = lane_fma(V(rounding_gamma<T>(5)), lane_abs(pl[i]), V(rounding_gamma<T>(1)) * lane_abs(p[i]));
+        const V q = scale * pl[i]; // pbrt-v4: reproject onto the sphere
+        p[i] = c[i] + q;
+        error[i] = lane_fma(V(rounding_gamma<T>(5)), lane_abs(q), V(rounding_gamma<T>(1)) * lane_abs(p[i]));
     }
 }
 /// sphere_surface for one ray, sphere and t.

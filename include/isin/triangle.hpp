@@ -260,14 +260,13 @@ ISIN_DETAIL_INLINE V largest_magnitude(const V& x, const V& y, const V& z) noexc
     return larger_of<T>(larger_of<T>(lane_abs(x), lane_abs(y)), lane_abs(z));
 }
 /// The triangle test's margin of hit_point's bound, γ₃₂·L³/|N|∞ (L the longest edge in max norm),
-/// from the edges V1 − V0, V2 − V0, V2 − V1 and |N|∞ of the §2 normal: the triangle's alone. A
-/// NaN (0/0 from a triangle shrunk to a point, whose point is then exact) leaves the own bound.
+/// from the vertices v (V0, V1, V2, x y z each) and |N|∞ of the §2 normal: the triangle's alone.
+/// A NaN (0/0 from a triangle shrunk to a point, whose point is then exact) leaves the own bound.
 template <class T, class V>
-ISIN_DETAIL_INLINE V triangle_test_margin(const V (&e1)[3], const V (&e2)[3], const V (&e3)[3],
-                                          const V& largest_N) noexcept {
-    const V L =
-        larger_of<T>(larger_of<T>(largest_magnitude<T>(e1[0], e1[1], e1[2]), largest_magnitude<T>(e2[0], e2[1], e2[2])),
-                     largest_magnitude<T>(e3[0], e3[1], e3[2]));
+ISIN_DETAIL_INLINE V triangle_test_margin(const V* v, const V& largest_N) noexcept {
+    const V L = larger_of<T>(larger_of<T>(largest_magnitude<T>(v[3] - v[0], v[4] - v[1], v[5] - v[2]),  // V1 − V0
+                                          largest_magnitude<T>(v[6] - v[0], v[7] - v[1], v[8] - v[2])), // V2 − V0
+                             largest_magnitude<T>(v[6] - v[3], v[7] - v[4], v[8] - v[5]));              // V2 − V1
     return V(rounding_gamma<T>(32)) * L * (L * L / largest_N); // γ₃₂·L³/|N|∞
 }
 /// hit_point's point and bound from the vertices v (V0, V1, V2, x y z each) and barycentrics u, w:
@@ -296,12 +295,10 @@ ISIN_DETAIL_INLINE void triangle_surface(const V* v, const V& u, const V& w, V (
                                          V (&n)[3]) noexcept {
     const V e1[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]};
     const V e2[3] = {v[6] - v[0], v[7] - v[1], v[8] - v[2]};
-    const V e3[3] = {v[6] - v[3], v[7] - v[4], v[8] - v[5]};
     n[0] = lane_cross_term(e1[1], e2[2], e1[2], e2[1]); // §2: N = (V1−V0) × (V2−V0)
     n[1] = lane_cross_term(e1[2], e2[0], e1[0], e2[2]);
     n[2] = lane_cross_term(e1[0], e2[1], e1[1], e2[0]);
-    barycentric_point<T>(v, u, w, triangle_test_margin<T>(e1, e2, e3, largest_magnitude<T>(n[0], n[1], n[2])), p,
-                         error);
+    barycentric_point<T>(v, u, w, triangle_test_margin<T>(v, largest_magnitude<T>(n[0], n[1], n[2])), p, error);
     lane_normalize<T>(n[0], n[1], n[2]);
 }
 
@@ -311,12 +308,8 @@ template <class T>
                                                                     const Vertex<T>& N) noexcept {
     const std::array<T, 9> vertices = vertices_of(tri);
     const T* v = vertices.data();
-    const T e1[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]};
-    const T e2[3] = {v[6] - v[0], v[7] - v[1], v[8] - v[2]};
-    const T e3[3] = {v[6] - v[3], v[7] - v[4], v[8] - v[5]};
     T p[3], error[3];
-    barycentric_point<T>(v, hit.u, hit.v, triangle_test_margin<T>(e1, e2, e3, largest_magnitude<T>(N.x, N.y, N.z)), p,
-                         error);
+    barycentric_point<T>(v, hit.u, hit.v, triangle_test_margin<T>(v, largest_magnitude<T>(N.x, N.y, N.z)), p, error);
     return {{p[0], p[1], p[2]}, {error[0], error[1], error[2]}};
 }
 } // namespace detail

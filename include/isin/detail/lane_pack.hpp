@@ -287,14 +287,16 @@ V lane_dot(V ax, V ay, V az, V bx, V by, V bz) noexcept {
 }
 
 /// normalize() (vec.hpp, §2: R / |R|) of the vectors (x, y, z) of one value or a register of
-/// lanes, with lane_dot's rounding: (0, 0, 0) where the length is 0 or not finite.
+/// lanes, with lane_dot's rounding: (0, 0, 0) where the length is 0 or not finite. Returns the
+/// length |R| it divided by.
 template <class T, class V>
-void lane_normalize(V& x, V& y, V& z) noexcept {
+V lane_normalize(V& x, V& y, V& z) noexcept {
     const V len = lane_sqrt(lane_dot(x, y, z, x, y, z)); // §2: |R|
     const auto has_direction = (len > T(0)) & (len < std::numeric_limits<T>::infinity());
     x = select(has_direction, x / len, V(T(0)));
     y = select(has_direction, y / len, V(T(0)));
     z = select(has_direction, z / len, V(T(0)));
+    return len;
 }
 
 } // namespace detail
