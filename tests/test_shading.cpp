@@ -5,10 +5,14 @@
 
 #include "approx.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <random>
+#include <vector>
 
 TEST_CASE_TEMPLATE("§7 example 7a: L = (0,0.8,−0.6), coefficient 0.8, red (255,0,0) → (204,0,0)", T, float, double) {
     const isin::Vertex<T> light{0, 40, 0}, N{0, 1, 0}, P{0, 0, 30};
@@ -118,6 +122,60 @@ TEST_CASE_TEMPLATE("to_byte: [0,1] to 0…255 rounded to nearest; out of range c
     CHECK(isin::to_byte(nan) == 0);
     CHECK(isin::to_byte(-nan) == 0);
     CHECK(isin::to_rgb8(isin::Color<T>{T(0.5), T(2), nan}) == isin::Rgb8{128, 255, 0});
+}
+
+TEST_CASE_TEMPLATE("to_bytes gives to_byte's bytes, a register of channels at a time, for any count", T, float,
+                   double) {
+    const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
+    std::vector<T> values = {T(0),
+                             -T(0),
+                             T(1),
+                             T(0.5),
+                             T(0.8),
+                             T(-0.3),
+                             T(1.7),
+                             T(1e30),
+                             inf,
+                             -inf,
+                             nan,
+                             -nan,
+                             std::numeric_limits<T>::denorm_min(),
+                             std::numeric_limits<T>::min(),
+                             T(1) - std::numeric_limits<T>::epsilon(),
+                             T(1) + std::numeric_limits<T>::epsilon()};
+    for (int i = 0; i <= 256; ++i) { // where c·255 + 0.5 is an integer, and the values beside it
+        const T edge = (T(i) - T(0.5)) / T(255);
+        T below = edge, above = edge;
+        for (int step = 0; step < 4; ++step) {
+            below = std::nextafter(below, -inf), above = std::nextafter(above, inf);
+            values.push_back(below), values.push_back(above);
+        }
+        values.push_back(edge), values.push_back(T(i) / T(255));
+    }
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<T> near(T(-0.1), T(1.1));
+    std::uniform_int_distribution<std::uint64_t> any_bits;
+    for (int i = 0; i < 20000; ++i) values.push_back(near(rng));
+    for (int i = 0; i < 2000; ++i) {
+        const std::uint64_t bits = any_bits(rng);
+        T x;
+        std::memcpy(&x, &bits, sizeof x); // any T, NaNs and infinities among them
+        values.push_back(x);
+    }
+    for (const std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(7), std::size_t(15), std::size_t(16),
+                                std::size_t(17), std::size_t(33), values.size()}) {
+        CAPTURE(n);
+        const std::size_t size = (n * sizeof(T) + 63) / 64 * 64 + 64; // to_bytes reads 64-byte aligned values
+        const std::unique_ptr<T, decltype(&std::free)> in(static_cast<T*>(std::aligned_alloc(64, size)), &std::free);
+        REQUIRE(in);
+        std::copy(values.begin(), values.begin() + std::ptrdiff_t(n), in.get());
+        std::vector<std::uint8_t> out(n + 1, 77); // one byte past the count, which must stay
+        isin::to_bytes(in.get(), n, out.data());
+        std::size_t differ = 0;
+        for (std::size_t i = 0; i < n; ++i) differ += out[i] != isin::to_byte(in.get()[i]);
+        CHECK(differ == 0);
+        CHECK(out[n] == 77);
+    }
 }
 
 TEST_CASE_TEMPLATE("§7 specular_power is std::pow bit for bit, also where cos^shininess underflows (no pow there)", T,

@@ -1,8 +1,11 @@
 #pragma once
 /// isin — colours: linear RGB in [0,1] for shading, 8-bit RGB for images.
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <type_traits>
+
+#include "detail/lane_pack.hpp"
 
 namespace isin {
 
@@ -77,12 +80,30 @@ template <class T>
     return {T(r) / T(255), T(g) / T(255), T(b) / T(255)};
 }
 
+namespace detail {
+/// to_byte's value before it is truncated to a byte, for one channel (V = T) or a register of
+/// them: 0 for NaN and c ≤ 0, 255 for c ≥ 1, else c·255 + 0.5 (lane_fma's rounding).
+template <class T, class V = T>
+[[nodiscard]] V byte_before_truncation(V c) noexcept {
+    return select(c > T(0), select(c < T(1), lane_fma(c, V(T(255)), V(T(0.5))), V(T(255))), V(T(0)));
+}
+} // namespace detail
+
 /// One channel in [0,1] to 0…255, rounded to nearest; NaN becomes 0, out-of-range values clamp.
 template <class T>
 [[nodiscard]] inline std::uint8_t to_byte(T c) noexcept {
-    if (!(c > T(0))) return 0;
-    if (!(c < T(1))) return 255;
-    return static_cast<std::uint8_t>(c * T(255) + T(0.5));
+    return static_cast<std::uint8_t>(detail::byte_before_truncation<T>(c));
+}
+
+/// to_byte of values[0 … n) into bytes[0 … n), a register of values at a time where the target
+/// has them (lane_pack.hpp); the same bytes. `values` is aligned to 64 bytes.
+template <class T>
+void to_bytes(const T* values, std::size_t n, std::uint8_t* bytes) noexcept {
+    using R = detail::LaneRegister<T>;
+    std::size_t i = 0;
+    for (; i + R::width <= n; i += R::width)
+        detail::store_bytes<T>(detail::byte_before_truncation<T>(R::load(values + i)), bytes + i);
+    for (; i < n; ++i) bytes[i] = to_byte(values[i]);
 }
 
 /// A colour as an 8-bit pixel (clamped, rounded).

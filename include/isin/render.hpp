@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -677,8 +678,9 @@ template <class T, template <class> class... S>
                     for (int tx = x0; tx < std::min(x0 + 8, W); tx += 4)
                         for (int y = ty; y < std::min(ty + 4, band_rows); ++y)
                             for (int x = tx; x < std::min(tx + 4, W); ++x) at_x[n] = x, at_y[n++] = row0 + y;
-                Color<T> sum[detail::stream_rays];
-                for (Color<T>& c : sum) c = {T(0), T(0), T(0)};
+                constexpr int values = 3 * detail::stream_rays;
+                alignas(64) T sum[values]; // r, g, b of pixel k at 3k
+                for (T& c : sum) c = T(0);
                 for (int sy = 0; sy < N; ++sy)
                     for (int sx = 0; sx < N; ++sx) {
                         T px[detail::stream_rays], py[detail::stream_rays];
@@ -691,10 +693,26 @@ template <class T, template <class> class... S>
                         local.primary += std::uint64_t(n);
                         Color<T> colour[detail::stream_rays];
                         detail::trace_stream(scene, rays, n, 0, opaque, opt, local, skip, colour);
-                        for (int k = 0; k < n; ++k) sum[k] += colour[k];
+                        for (int k = 0; k < n; ++k)
+                            sum[3 * k] += colour[k].r, sum[3 * k + 1] += colour[k].g, sum[3 * k + 2] += colour[k].b;
                     }
-                for (int k = 0; k < n; ++k)
-                    image(at_x[k], at_y[k]) = to_rgb8(N == 1 ? sum[k] : sum[k] / T(N * N), opt.encoding); // x/1 = x
+                if (N > 1)
+                    for (T& c : sum) c /= T(N * N); // the mean of the samples
+                std::uint8_t bytes[values];         // in Rgb8's order
+                if (opt.encoding == ColorEncoding::linear) {
+                    to_bytes(sum, std::size_t(3 * n), bytes); // a register of channels at a time
+                } else {
+                    for (int k = 0; k < n; ++k) {
+                        const Rgb8 p = to_rgb8(Color<T>{sum[3 * k], sum[3 * k + 1], sum[3 * k + 2]}, opt.encoding);
+                        bytes[3 * k] = p.r, bytes[3 * k + 1] = p.g, bytes[3 * k + 2] = p.b;
+                    }
+                }
+                static_assert(sizeof(Rgb8) == 3, "a pixel is its three bytes");
+                for (int k = 0; k < n;) { // a tile's row of 4 pixels at once where it is whole
+                    const int run = k + 3 < n && at_y[k + 3] == at_y[k] && at_x[k + 3] == at_x[k] + 3 ? 4 : 1;
+                    std::memcpy(&image(at_x[k], at_y[k]), bytes + 3 * k, std::size_t(3 * run));
+                    k += run;
+                }
             }
             const int done = rows_done.fetch_add(band_rows) + band_rows;
             if (reporter && show_progress) {

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <type_traits>
 
@@ -80,6 +81,10 @@ struct Pack<float> {
     explicit Pack(__m512 r) noexcept : v(r) {}
     static Pack load(const float* p) noexcept { return Pack(_mm512_load_ps(p)); }
     void store(float* p) const noexcept { _mm512_store_ps(p, v); }
+    /// The lanes, each in [0, 256), truncated to bytes at p (p[0 … 16)).
+    void store_bytes(std::uint8_t* p) const noexcept {
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(p), _mm512_cvtepi32_epi8(_mm512_cvttps_epi32(v)));
+    }
     friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm512_add_ps(a.v, b.v)); }
     friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm512_sub_ps(a.v, b.v)); }
     friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm512_mul_ps(a.v, b.v)); }
@@ -112,6 +117,11 @@ struct Pack<double> {
     explicit Pack(__m512d r) noexcept : v(r) {}
     static Pack load(const double* p) noexcept { return Pack(_mm512_load_pd(p)); }
     void store(double* p) const noexcept { _mm512_store_pd(p, v); }
+    /// The lanes, each in [0, 256), truncated to bytes at p (p[0 … 8)).
+    void store_bytes(std::uint8_t* p) const noexcept {
+        const __m512i wide = _mm512_castsi256_si512(_mm512_cvttpd_epi32(v)); // the upper half unused
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(p), _mm512_cvtepi32_epi8(wide));
+    }
     friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm512_add_pd(a.v, b.v)); }
     friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm512_sub_pd(a.v, b.v)); }
     friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm512_mul_pd(a.v, b.v)); }
@@ -173,6 +183,12 @@ struct Pack<float> {
     explicit Pack(__m256 r) noexcept : v(r) {}
     static Pack load(const float* p) noexcept { return Pack(_mm256_load_ps(p)); }
     void store(float* p) const noexcept { _mm256_store_ps(p, v); }
+    /// The lanes, each in [0, 256), truncated to bytes at p (p[0 … 8)).
+    void store_bytes(std::uint8_t* p) const noexcept {
+        const __m256i i = _mm256_cvttps_epi32(v);
+        const __m128i words = _mm_packs_epi32(_mm256_castsi256_si128(i), _mm256_extractf128_si256(i, 1));
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(p), _mm_packus_epi16(words, words));
+    }
     friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm256_add_ps(a.v, b.v)); }
     friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm256_sub_ps(a.v, b.v)); }
     friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm256_mul_ps(a.v, b.v)); }
@@ -206,6 +222,12 @@ struct Pack<double> {
     explicit Pack(__m256d r) noexcept : v(r) {}
     static Pack load(const double* p) noexcept { return Pack(_mm256_load_pd(p)); }
     void store(double* p) const noexcept { _mm256_store_pd(p, v); }
+    /// The lanes, each in [0, 256), truncated to bytes at p (p[0 … 4)).
+    void store_bytes(std::uint8_t* p) const noexcept {
+        const __m128i words = _mm_packs_epi32(_mm256_cvttpd_epi32(v), _mm_setzero_si128());
+        const int bytes = _mm_cvtsi128_si32(_mm_packus_epi16(words, words));
+        std::memcpy(p, &bytes, 4);
+    }
     friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm256_add_pd(a.v, b.v)); }
     friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm256_sub_pd(a.v, b.v)); }
     friend Pack operator*(Pack a, Pack b) noexcept { return Pack(_mm256_mul_pd(a.v, b.v)); }
@@ -272,6 +294,16 @@ void store_lanes(const V& v, T* p) noexcept {
         *p = v;
     else
         LaneRegister<T>::store(v, p);
+}
+
+/// A value (V = T) or a register of lanes, each in [0, 256), truncated to bytes at p (as
+/// static_cast<std::uint8_t> truncates).
+template <class T, class V>
+void store_bytes(const V& v, std::uint8_t* p) noexcept {
+    if constexpr (std::is_same_v<V, T>)
+        *p = static_cast<std::uint8_t>(v);
+    else
+        v.store_bytes(p);
 }
 
 /// x·y − z·w with the rounding lane_fma gives it.
