@@ -373,11 +373,12 @@ ISIN_DETAIL_NOINLINE void light_term_pass(T* p, std::size_t stride, std::size_t 
     alignas(64) T cosine[W], shine[W], spec[W];
     store_lanes(lane_dot(rx, ry, rz, at(Lanes::vx), at(Lanes::vy), at(Lanes::vz)), cosine);
     store_lanes(at(Lanes::shininess), shine);
-    const T* lit = of_light(Lanes::n_dot_l);
-    const T* through = of_light(Lanes::visible);
-    for (std::size_t k = 0; k < W; ++k) // cos^shininess lane by lane (std::pow), where the term counts
-        spec[k] = lit[k] > T(0) && through[k] > T(0) ? specular_power(cosine[k], shine[k]) : T(0);
+    store_lanes(V(T(0)), spec);
     const auto counts = (n_dot_l > T(0)) & (visible > T(0));
+    for (std::uint64_t m = lane_bits(counts); m; m &= m - 1) { // cos^shininess (std::pow) where the term counts
+        const auto k = std::size_t(lowest_bit(m));
+        spec[k] = specular_power(cosine[k], shine[k]);
+    }
     const V diffuse = at(Lanes::kd) * n_dot_l, specular = at(Lanes::ks) * load_lanes<T, V>(spec);
     const auto add = [&](std::size_t sum, std::size_t object, std::size_t highlight, T colour) {
         const V term = lane_fma(diffuse, at(object), specular * at(highlight)) * V(colour);
