@@ -724,19 +724,32 @@ TEST_CASE_TEMPLATE(
     CHECK(lifted > 10);
 }
 
-TEST_CASE_TEMPLATE(
-    "hit_into_lanes and surface_pass: Scene::surface's point, bound and normals, bit for bit, in any lane", T, float,
-    double) {
+TEST_CASE_TEMPLATE("hits_into_lanes and surface_pass: Scene::surface's point, bound and normals, the hit's material, "
+                   "colour and ray, bit for bit, in any lane, in runs of hits on one primitive or alone",
+                   T, float, double) {
     using Lanes = isin::detail::ShadingLanes<T>;
     constexpr std::size_t W = Lanes::width, N = 64;
     isin::Scene<T, isin::Sphere, isin::Triangle, isin::TexturedTriangle> scene;
-    const auto m = scene.add_material({});
     std::mt19937 rng(13);
-    std::uniform_real_distribution<T> coord(T(-20), T(20));
+    std::uniform_real_distribution<T> coord(T(-20), T(20)), unit(T(0), T(1));
+    // a material of its own for each primitive, half of the textured triangles' with a texture
+    const auto checkers =
+        scene.add_texture(isin::Checkerboard<T>{{T(0.9), T(0.8), T(0.1)}, {T(0.1), T(0.2), T(0.7)}, 7, 5});
+    const auto material = [&](bool textured) {
+        isin::Material<T> m;
+        m.color = {unit(rng), unit(rng), unit(rng)};
+        m.specular_color = {unit(rng), unit(rng), unit(rng)};
+        m.ambient_color = {unit(rng), unit(rng), unit(rng)};
+        m.ka = unit(rng), m.kd = unit(rng), m.ks = unit(rng), m.shininess = T(1) + T(100) * unit(rng);
+        if (textured) m.texture = checkers;
+        return scene.add_material(m);
+    };
+    scene.ambient_light = {T(0.9), T(0.7), T(0.8)};
     const auto point = [&] { return isin::Vertex<T>{coord(rng), coord(rng), T(40) + coord(rng)}; };
-    for (int i = 0; i < 6; ++i) scene.add(isin::Triangle<T>{point(), point(), point()}, m);
-    for (int i = 0; i < 4; ++i) scene.add(isin::TexturedTriangle<T>{{point(), point(), point()}, i % 2 == 1}, m);
-    scene.add(isin::Sphere<T>{{T(0), T(0), T(20)}, T(5)}, m); // in front of most triangles
+    for (int i = 0; i < 6; ++i) scene.add(isin::Triangle<T>{point(), point(), point()}, material(false));
+    for (int i = 0; i < 4; ++i)
+        scene.add(isin::TexturedTriangle<T>{{point(), point(), point()}, i % 2 == 1}, material(i != 3));
+    scene.add(isin::Sphere<T>{{T(0), T(0), T(20)}, T(5)}, material(false)); // in front of most triangles
     std::vector<isin::Ray<T>> rays;
     std::vector<isin::Hit<T>> hits;
     for (int tries = 0; rays.size() < N && tries < 100000; ++tries) { // rays from the eye that hit
@@ -747,29 +760,65 @@ TEST_CASE_TEMPLATE(
         if (h) rays.push_back(r), hits.push_back(h);
     }
     REQUIRE(rays.size() == N);
-    alignas(64) T lanes[Lanes::rows * N];
-    for (std::size_t k = 0; k < N; ++k) isin::detail::hit_into_lanes(scene, rays[k], hits[k], lanes, N, k);
-    for (std::size_t k = 0; k < N; k += W) isin::detail::surface_pass(lanes + k, N);
-    int same = 0, triangles = 0;
-    const auto bits_equal = [](const isin::Vertex<T>& a, const isin::Vertex<T>& b) {
-        return std::memcmp(&a, &b, sizeof a) == 0;
-    };
-    for (std::size_t k = 0; k < N; ++k) {
-        const isin::SurfacePoint<T> sp = scene.surface(rays[k], hits[k]);
-        triangles += hits[k].geometry != 0;
-        const auto matches = [&](const T* at, std::size_t stride, std::size_t i) {
-            return bits_equal(Lanes::vertex(at, stride, i, Lanes::px), sp.point) &&
-                   bits_equal(Lanes::vertex(at, stride, i, Lanes::ex), sp.error) &&
-                   bits_equal(Lanes::vertex(at, stride, i, Lanes::gx), sp.normal) &&
-                   bits_equal(Lanes::vertex(at, stride, i, Lanes::nx), sp.shading_normal) &&
-                   bits_equal(Lanes::vertex(at, stride, i, Lanes::hx), sp.shading_point);
-        };
-        T one[Lanes::rows]; // the same hit alone, as trace() shades it
-        isin::detail::hit_into_lanes(scene, rays[k], hits[k], one, 1, 0);
-        isin::detail::surface_pass<T, T>(one, 1);
-        same += matches(lanes, N, k) && matches(one, 1, 0);
+    const auto bits_equal = [](const auto& a, const auto& b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+    // Lane i holds hit at[i]: the hits as found (runs of one or two), then sorted by primitive
+    // (long runs), then every other one reversed in each run's order.
+    std::vector<int> at(N);
+    for (std::size_t i = 0; i < N; ++i) at[i] = int(i);
+    std::vector<std::vector<int>> orders{at};
+    std::stable_sort(at.begin(), at.end(), [&](int a, int b) {
+        return std::make_pair(hits[std::size_t(a)].geometry, hits[std::size_t(a)].primitive) <
+               std::make_pair(hits[std::size_t(b)].geometry, hits[std::size_t(b)].primitive);
+    });
+    orders.push_back(at);
+    std::reverse(at.begin(), at.end());
+    orders.push_back(at);
+    int longest_run = 0, textured = 0;
+    for (const std::vector<int>& order : orders) {
+        alignas(64) T lanes[Lanes::rows * N];
+        const isin::Material<T>* materials[N] = {};
+        isin::detail::hits_into_lanes(scene, rays.data(), hits.data(), order.data(), N, lanes, N, materials);
+        for (std::size_t k = 0; k < N; k += W) isin::detail::surface_pass(lanes + k, N);
+        int same = 0, triangles = 0;
+        for (std::size_t i = 0, run = 0; i < N; ++i) {
+            const std::size_t k = std::size_t(order[i]);
+            run = i > 0 && hits[k].primitive == hits[std::size_t(order[i - 1])].primitive &&
+                          hits[k].geometry == hits[std::size_t(order[i - 1])].geometry
+                      ? run + 1
+                      : 1;
+            longest_run = std::max(longest_run, int(run));
+            const isin::SurfacePoint<T> sp = scene.surface(rays[k], hits[k]);
+            const isin::Material<T>& m = scene.material(sp.material);
+            triangles += hits[k].geometry != 0;
+            textured += m.texture >= 0;
+            const isin::Color<T> object = sp.tint * (m.texture >= 0 ? isin::sample(scene.texture(m.texture), sp.st[0],
+                                                                                   sp.st[1], scene.texture_filter)
+                                                                    : m.color);
+            const isin::Color<T> ambient = m.ka * m.ambient_color * object * scene.ambient_light;
+            const auto matches = [&](const T* p, std::size_t stride, std::size_t j, const isin::Material<T>* mj) {
+                const auto value = [&](std::size_t f) { return p[f * stride + j]; };
+                const auto colour = [&](std::size_t f) { return isin::Color<T>{value(f), value(f + 1), value(f + 2)}; };
+                return bits_equal(Lanes::vertex(p, stride, j, Lanes::px), sp.point) &&
+                       bits_equal(Lanes::vertex(p, stride, j, Lanes::ex), sp.error) &&
+                       bits_equal(Lanes::vertex(p, stride, j, Lanes::gx), sp.normal) &&
+                       bits_equal(Lanes::vertex(p, stride, j, Lanes::nx), sp.shading_normal) &&
+                       bits_equal(Lanes::vertex(p, stride, j, Lanes::hx), sp.shading_point) &&
+                       bits_equal(Lanes::vertex(p, stride, j, Lanes::vx), rays[k].direction) && mj == &m &&
+                       value(Lanes::kd) == m.kd && value(Lanes::ks) == m.ks && value(Lanes::shininess) == m.shininess &&
+                       bits_equal(colour(Lanes::cr), object) && bits_equal(colour(Lanes::sr), m.specular_color) &&
+                       bits_equal(colour(Lanes::lr), ambient);
+            };
+            T one[Lanes::rows]; // the same hit alone, as trace() shades it
+            const isin::Material<T>* alone = nullptr;
+            const int only = int(k);
+            isin::detail::hits_into_lanes(scene, rays.data(), hits.data(), &only, 1, one, 1, &alone);
+            isin::detail::surface_pass<T, T>(one, 1);
+            same += matches(lanes, N, i, materials[i]) && matches(one, 1, 0, alone);
+        }
+        CHECK(same == int(N));
+        CHECK(triangles > 20); // both kinds of hit were met
+        CHECK(triangles < int(N) - 3);
     }
-    CHECK(same == int(N));
-    CHECK(triangles > 20); // both kinds of hit were met
-    CHECK(triangles < int(N) - 3);
+    CHECK(longest_run > 8); // runs of many hits on one primitive were met
+    CHECK(textured > 6);    // and textured hits (with one colour each)
 }

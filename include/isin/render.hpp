@@ -108,11 +108,12 @@ struct Shading {
 };
 
 // A stream's shaded points as lanes (trace()'s one point as one lane): lane k of field f is at
-// lanes[f·stride + k]. Each hit's surface is written into its lane (hit_into_lanes, surface_pass), then
-// side_pass turns the normals to the ray's side and places the secondary rays' origins, and the
-// light passes add each light's Phong terms (§7). The renderer's streams (up to stream_rays
-// points) run the passes a register of lanes at a time (lane_pack.hpp), trace() on its one
-// point; both round alike (lane_fma), so a point gets the same colour bit for bit.
+// lanes[f·stride + k]. Each hit's surface is written into its lane (hits_into_lanes,
+// surface_pass), then side_pass turns the normals to the ray's side and places the secondary
+// rays' origins, and the light passes add each light's Phong terms (§7). The renderer's streams
+// (up to stream_rays points) run the passes a register of lanes at a time (lane_pack.hpp),
+// trace() on its one point; both round alike (lane_fma), so a point gets the same colour bit
+// for bit.
 template <class T>
 struct ShadingLanes : LaneRegister<T> {
     // clang-format off
@@ -158,6 +159,18 @@ struct ShadingLanes : LaneRegister<T> {
     static void set(T* lanes, std::size_t stride, std::size_t k, std::size_t f, const Color<T>& c) noexcept {
         lanes[f * stride + k] = c.r, lanes[(f + 1) * stride + k] = c.g, lanes[(f + 2) * stride + k] = c.b;
     }
+    // Field f of lanes [a, b) set to one value; a vector's or a colour's three fields from f on.
+    static void fill(T* lanes, std::size_t stride, std::size_t a, std::size_t b, std::size_t f, T value) noexcept {
+        for (std::size_t k = a; k < b; ++k) lanes[f * stride + k] = value;
+    }
+    static void fill(T* lanes, std::size_t stride, std::size_t a, std::size_t b, std::size_t f,
+                     const Vertex<T>& v) noexcept {
+        fill(lanes, stride, a, b, f, v.x), fill(lanes, stride, a, b, f + 1, v.y), fill(lanes, stride, a, b, f + 2, v.z);
+    }
+    static void fill(T* lanes, std::size_t stride, std::size_t a, std::size_t b, std::size_t f,
+                     const Color<T>& c) noexcept {
+        fill(lanes, stride, a, b, f, c.r), fill(lanes, stride, a, b, f + 1, c.g), fill(lanes, stride, a, b, f + 2, c.b);
+    }
     // The vector in the three fields from f on.
     static Vertex<T> vertex(const T* lanes, std::size_t stride, std::size_t k, std::size_t f) noexcept {
         return {lanes[f * stride + k], lanes[(f + 1) * stride + k], lanes[(f + 2) * stride + k]};
@@ -189,74 +202,112 @@ struct ShadingLanes : LaneRegister<T> {
     }
 };
 
-// The material, colour and ray of a hit into lane k: the material's Phong weights, the surface's
-// colour (the texture at st where it has one, else the material's, times the vertex colour
-// `tint`), its ambient term (§7), and the ray's direction. Returns the material.
+// The colour of a surface (§7): the texture at st where its material has one and the hit has
+// texture coordinates, else the material's colour; times the vertex colour `tint`.
 template <class T, template <class> class... S>
-const Material<T>& colour_into_lanes(const Scene<T, S...>& scene, std::uint32_t material, bool has_st,
-                                     const std::array<T, 2>& st, const Color<T>& tint, const Ray<T>& ray, T* lanes,
-                                     std::size_t stride, std::size_t k) {
-    using Lanes = ShadingLanes<T>;
-    const Material<T>& m = scene.material(material);
-    const Color<T> object = tint * (m.texture >= 0 && has_st ? sample(scene.texture(m.texture), st[0], st[1],
-                                                                      m.texture_filter.value_or(scene.texture_filter))
-                                                             : m.color);
-    const Color<T> ambient = m.ka * m.ambient_color * object * scene.ambient_light; // §7: ambient
-    Lanes::set(lanes, stride, k, Lanes::vx, ray.direction);
-    lanes[Lanes::kd * stride + k] = m.kd, lanes[Lanes::ks * stride + k] = m.ks;
-    lanes[Lanes::shininess * stride + k] = m.shininess;
-    Lanes::set(lanes, stride, k, Lanes::cr, object);
-    Lanes::set(lanes, stride, k, Lanes::sr, m.specular_color);
-    Lanes::set(lanes, stride, k, Lanes::lr, ambient);
-    return m;
+Color<T> surface_colour(const Scene<T, S...>& scene, const Material<T>& m, bool has_st, const std::array<T, 2>& st,
+                        const Color<T>& tint) {
+    return tint * (m.texture >= 0 && has_st
+                       ? sample(scene.texture(m.texture), st[0], st[1], m.texture_filter.value_or(scene.texture_filter))
+                       : m.color);
 }
 
-// `ray`'s hit into lane k: on the scene's own triangle kinds its vertices and barycentrics, on its
-// spheres the sphere, the ray's origin and t, whose surface surface_pass computes a register at a
-// time (as Scene::surface does: triangle_surface, sphere_surface); on anything else its surface
-// from Scene::surface. Then its material and colour (colour_into_lanes). Returns the material.
+// The surface's colour `object` and its ambient term (§7) into lanes [a, b).
 template <class T, template <class> class... S>
-ISIN_DETAIL_NOINLINE const Material<T>& hit_into_lanes(const Scene<T, S...>& scene, const Ray<T>& ray,
-                                                       const Hit<T>& hit, T* lanes, std::size_t stride, std::size_t k) {
+void colour_into_lanes(const Scene<T, S...>& scene, const Material<T>& m, const Color<T>& object, T* lanes,
+                       std::size_t stride, std::size_t a, std::size_t b) noexcept {
     using Lanes = ShadingLanes<T>;
-    const Material<T>* m = nullptr;
-    scene.for_each_kind([&](auto kind, const auto& vec) {
-        using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
-        constexpr bool triangle = is_triangle_kind<Shape>::value, sphere = std::is_same_v<Shape, Sphere<T>>;
-        if constexpr (triangle || sphere) {
-            if (kind != hit.geometry) return;
-            const auto& obj = vec.at(hit.primitive);
-            if constexpr (triangle) {
-                const std::array<T, 9> v = vertices_of(*triangle_of(obj.shape));
-                for (std::size_t f = 0; f < 9; ++f) lanes[(Lanes::v0x + f) * stride + k] = v[f];
-                lanes[Lanes::tu * stride + k] = hit.u, lanes[Lanes::tv * stride + k] = hit.v;
-            } else {
-                Lanes::set(lanes, stride, k, Lanes::cx, obj.shape.center);
-                lanes[Lanes::radius * stride + k] = obj.shape.radius;
-                Lanes::set(lanes, stride, k, Lanes::rox, ray.origin);
-                for (std::size_t f = Lanes::rox + 3; f < Lanes::t; ++f) lanes[f * stride + k] = T(0);
-                lanes[Lanes::t * stride + k] = hit.t, lanes[Lanes::tv * stride + k] = T(0);
+    const Color<T> ambient = m.ka * m.ambient_color * object * scene.ambient_light; // §7: ambient
+    Lanes::fill(lanes, stride, a, b, Lanes::cr, object);
+    Lanes::fill(lanes, stride, a, b, Lanes::lr, ambient);
+}
+
+// The hits of rays[at[i]] (hits[at[i]], each a hit) into lanes i < count, a run of hits on one
+// primitive at a time: what the primitive and its material give the whole run (its vertices or
+// centre and radius, the material's weights and highlight, the colour where it has no texture)
+// is written once per row, what each hit has of its own (barycentrics, a sphere's ray origin
+// and t, texture colour, the ray's direction) lane by lane. On the scene's own triangle kinds
+// surface_pass computes the surface from the vertices and barycentrics, on its spheres from the
+// sphere, the ray's origin and t (as Scene::surface does: triangle_surface, sphere_surface); on
+// anything else (user kinds, placed meshes) the surface is Scene::surface's. material[i] is
+// lane i's material.
+template <class T, template <class> class... S>
+ISIN_DETAIL_NOINLINE void hits_into_lanes(const Scene<T, S...>& scene, const Ray<T>* rays, const Hit<T>* hits,
+                                          const int* at, std::size_t count, T* lanes, std::size_t stride,
+                                          const Material<T>** material) {
+    using Lanes = ShadingLanes<T>;
+    const auto row = [&](std::size_t f) { return lanes + f * stride; };
+    for (std::size_t a = 0; a < count;) {
+        const Hit<T>& first = hits[at[a]];
+        std::size_t b = a + 1;
+        while (b < count && hits[at[b]].geometry == first.geometry && hits[at[b]].primitive == first.primitive) ++b;
+        // The material's weights and highlight, and each ray's direction.
+        const auto material_into_lanes = [&](const Material<T>& m, std::size_t lo, std::size_t hi) {
+            Lanes::fill(lanes, stride, lo, hi, Lanes::kd, m.kd);
+            Lanes::fill(lanes, stride, lo, hi, Lanes::ks, m.ks);
+            Lanes::fill(lanes, stride, lo, hi, Lanes::shininess, m.shininess);
+            Lanes::fill(lanes, stride, lo, hi, Lanes::sr, m.specular_color);
+            for (std::size_t k = lo; k < hi; ++k)
+                material[k] = &m, Lanes::set(lanes, stride, k, Lanes::vx, rays[at[k]].direction);
+        };
+        bool own_kind = false;
+        scene.for_each_kind([&](auto kind, const auto& vec) {
+            using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
+            constexpr bool triangle = is_triangle_kind<Shape>::value, sphere = std::is_same_v<Shape, Sphere<T>>;
+            if constexpr (triangle || sphere) {
+                if (kind != first.geometry) return;
+                own_kind = true;
+                const auto& obj = vec.at(first.primitive);
+                if constexpr (triangle) {
+                    const std::array<T, 9> v = vertices_of(*triangle_of(obj.shape));
+                    for (std::size_t f = 0; f < 9; ++f) Lanes::fill(lanes, stride, a, b, Lanes::v0x + f, v[f]);
+                    for (std::size_t k = a; k < b; ++k)
+                        row(Lanes::tu)[k] = hits[at[k]].u, row(Lanes::tv)[k] = hits[at[k]].v;
+                } else {
+                    Lanes::fill(lanes, stride, a, b, Lanes::cx, obj.shape.center);
+                    Lanes::fill(lanes, stride, a, b, Lanes::radius, obj.shape.radius);
+                    for (std::size_t f = Lanes::rox + 3; f < Lanes::t; ++f) Lanes::fill(lanes, stride, a, b, f, T(0));
+                    Lanes::fill(lanes, stride, a, b, Lanes::tv, T(0));
+                    for (std::size_t k = a; k < b; ++k)
+                        Lanes::set(lanes, stride, k, Lanes::rox, rays[at[k]].origin), row(Lanes::t)[k] = hits[at[k]].t;
+                }
+                Lanes::fill(lanes, stride, a, b, Lanes::is_triangle, triangle ? T(1) : T(0));
+                Lanes::fill(lanes, stride, a, b, Lanes::is_sphere, sphere ? T(1) : T(0));
+                const Material<T>& m = scene.material(obj.material);
+                material_into_lanes(m, a, b);
+                const Color<T> white{T(1), T(1), T(1)};
+                std::array<T, 2> st{};
+                if (m.texture < 0 || !texture_coordinates(obj.shape, first, st)) { // one colour for the run
+                    colour_into_lanes(scene, m, surface_colour(scene, m, false, st, white), lanes, stride, a, b);
+                    return;
+                }
+                for (std::size_t k = a; k < b; ++k) {
+                    const bool has_st = texture_coordinates(obj.shape, hits[at[k]], st);
+                    colour_into_lanes(scene, m, surface_colour(scene, m, has_st, st, white), lanes, stride, k, k + 1);
+                }
             }
-            lanes[Lanes::is_triangle * stride + k] = triangle ? T(1) : T(0);
-            lanes[Lanes::is_sphere * stride + k] = sphere ? T(1) : T(0);
-            std::array<T, 2> st{};
-            const bool has_st = texture_coordinates(obj.shape, hit, st);
-            m = &colour_into_lanes(scene, obj.material, has_st, st, {T(1), T(1), T(1)}, ray, lanes, stride, k);
+        });
+        if (!own_kind) {
+            for (std::size_t k = a; k < b; ++k) {
+                const SurfacePoint<T> sp = scene.surface(rays[at[k]], hits[at[k]]);
+                for (std::size_t f = Lanes::v0x; f < Lanes::primitive_end; ++f) row(f)[k] = T(0);
+                Lanes::set(lanes, stride, k, Lanes::px, sp.point);
+                Lanes::set(lanes, stride, k, Lanes::ex, sp.error);
+                Lanes::set(lanes, stride, k, Lanes::gx, sp.normal);
+                Lanes::set(lanes, stride, k, Lanes::nx, sp.shading_normal);
+                Lanes::set(lanes, stride, k, Lanes::hx, sp.shading_point);
+                const Material<T>& m = scene.material(sp.material);
+                material_into_lanes(m, k, k + 1);
+                colour_into_lanes(scene, m, surface_colour(scene, m, sp.has_texture_coordinates, sp.st, sp.tint), lanes,
+                                  stride, k, k + 1);
+            }
         }
-    });
-    if (m) return *m;
-    const SurfacePoint<T> sp = scene.surface(ray, hit);
-    for (std::size_t f = Lanes::v0x; f < Lanes::primitive_end; ++f) lanes[f * stride + k] = T(0);
-    Lanes::set(lanes, stride, k, Lanes::px, sp.point);
-    Lanes::set(lanes, stride, k, Lanes::ex, sp.error);
-    Lanes::set(lanes, stride, k, Lanes::gx, sp.normal);
-    Lanes::set(lanes, stride, k, Lanes::nx, sp.shading_normal);
-    Lanes::set(lanes, stride, k, Lanes::hx, sp.shading_point);
-    return colour_into_lanes(scene, sp.material, sp.has_texture_coordinates, sp.st, sp.tint, ray, lanes, stride, k);
+        a = b;
+    }
 }
 
 // For the register of lanes at p (or the one point at p, V = T): the surfaces of the lanes that
-// hold triangle or sphere hits (hit_into_lanes), as Scene::surface computes them
+// hold triangle or sphere hits (hits_into_lanes), as Scene::surface computes them
 // (triangle_surface, sphere_surface): the point and its bound, the unit normal, which is also
 // the shading normal, and the point, which is also the shading point.
 template <class T, class V = typename LaneRegister<T>::V>
@@ -407,7 +458,10 @@ template <class T, template <class> class... S>
     // (the same bits): its surface and sides, then the lights one at a time.
     using Lanes = detail::ShadingLanes<T>;
     T lanes[Lanes::rows];
-    const Material<T>& m = detail::hit_into_lanes(scene, ray, sh, lanes, 1, 0);
+    const Material<T>* material = nullptr;
+    const int only = 0;
+    detail::hits_into_lanes(scene, &ray, &sh, &only, 1, lanes, 1, &material);
+    const Material<T>& m = *material;
     detail::surface_pass<T, T>(lanes, 1);
     detail::side_pass<T, T>(lanes, 1);
     const Vertex<T> from = Lanes::vertex(lanes, 1, 0, Lanes::hx); // where shadow rays start
@@ -517,15 +571,14 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
     constexpr std::size_t W = Lanes::width, stride = N;
     alignas(64) T lanes[Lanes::rows * stride];
     const Material<T>* material[N];
-    int shaded[N], count = 0;
+    int shaded[N] = {}, count = 0; // (zeroed: g++ warns of a pointer to an array not yet written)
     for (int k = 0; k < n; ++k) {
-        if (!hits[k]) {
+        if (hits[k])
+            shaded[count++] = k;
+        else
             out[k] = scene.background;
-            continue;
-        }
-        material[count] = &hit_into_lanes(scene, rays[k], hits[k], lanes, stride, std::size_t(count));
-        shaded[count++] = k;
     }
+    hits_into_lanes(scene, rays, hits, shaded, std::size_t(count), lanes, stride, material);
     const std::size_t padded = (std::size_t(count) + W - 1) / W * W;
     for (std::size_t k = std::size_t(count); k < padded; ++k) Lanes::clear(lanes, stride, k);
     for (std::size_t k = 0; k < padded; k += W) surface_pass(lanes + k, stride), side_pass(lanes + k, stride);

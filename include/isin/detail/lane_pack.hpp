@@ -83,7 +83,8 @@ struct Pack<float> {
     void store(float* p) const noexcept { _mm512_store_ps(p, v); }
     /// The lanes, each in [0, 256), truncated to bytes at p (p[0 … 16)).
     void store_bytes(std::uint8_t* p) const noexcept {
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(p), _mm512_cvtepi32_epi8(_mm512_cvttps_epi32(v)));
+        // the masked forms: g++ 12 warns of the plain ones' undefined sources (-Wmaybe-uninitialized)
+        _mm512_mask_cvtepi32_storeu_epi8(p, 0xffff, _mm512_maskz_cvttps_epi32(0xffff, v));
     }
     friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm512_add_ps(a.v, b.v)); }
     friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm512_sub_ps(a.v, b.v)); }
@@ -119,8 +120,9 @@ struct Pack<double> {
     void store(double* p) const noexcept { _mm512_store_pd(p, v); }
     /// The lanes, each in [0, 256), truncated to bytes at p (p[0 … 8)).
     void store_bytes(std::uint8_t* p) const noexcept {
-        const __m512i wide = _mm512_castsi256_si512(_mm512_cvttpd_epi32(v)); // the upper half unused
-        _mm_storel_epi64(reinterpret_cast<__m128i*>(p), _mm512_cvtepi32_epi8(wide));
+        const __m512i wide =
+            _mm512_maskz_inserti64x4(0xff, _mm512_setzero_si512(), _mm512_maskz_cvttpd_epi32(0xff, v), 0);
+        _mm512_mask_cvtepi32_storeu_epi8(p, 0xff, wide);
     }
     friend Pack operator+(Pack a, Pack b) noexcept { return Pack(_mm512_add_pd(a.v, b.v)); }
     friend Pack operator-(Pack a, Pack b) noexcept { return Pack(_mm512_sub_pd(a.v, b.v)); }
