@@ -161,6 +161,10 @@ struct ShadingLanes : LaneRegister<T> {
     }
     // Field f of lanes [a, b) set to one value; a vector's or a colour's three fields from f on.
     static void fill(T* lanes, std::size_t stride, std::size_t a, std::size_t b, std::size_t f, T value) noexcept {
+        if (b == a + 1) { // one lane (trace()'s, a run of one) without the vectorised loop's set-up
+            lanes[f * stride + a] = value;
+            return;
+        }
         for (std::size_t k = a; k < b; ++k) lanes[f * stride + k] = value;
     }
     static void fill(T* lanes, std::size_t stride, std::size_t a, std::size_t b, std::size_t f,
