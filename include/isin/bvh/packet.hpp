@@ -247,7 +247,10 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
         p.far_lo[a] = p.inv_lo[a] * widen, p.far_hi[a] = p.inv_hi[a] * widen;
         // Each ray's fast slab distance p·inv − o·inv is within 6ε(|p| + |o|)|inv| of the exact
         // one (prepare_slab's allowance included), and the interval products within 2u of theirs;
-        // |p| ≤ the tree's bound. 32ε covers both with room.
+        // |p| ≤ the tree's bound. A triangle the watertight test says a ray hits lies within
+        // 2.5ε(|p| + |o|) of the ray across it (its sheared vertices round by at most 5u of their
+        // distance from o, triangles_avx2.hpp), so the ray passes that near the triangle's box
+        // (the packet's triangle filter, triangle_bvh.hpp). 32ε covers all of it with room.
         const float o_max = std::max(std::fabs(o_lo), std::fabs(o_hi));
         const float inv_max = std::max(std::fabs(p.far_lo[a]), std::fabs(p.far_hi[a]));
         p.margin[a] = 32 * std::numeric_limits<float>::epsilon() * (bound + o_max) * inv_max;
@@ -255,17 +258,19 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
     return lanes;
 }
 
-/// The interval slab test of a node's 8 children for the whole packet: bit k set when some ray
-/// of it may enter child k before `t_far` (every child a ray of the packet enters is set);
-/// `t_near` gets a lower bound of the rays' entry distances.
-inline unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPacket& p, float t_far,
-                                    float (&t_near)[8]) noexcept {
+/// The interval slab test of 8 boxes for the whole packet, each box given per axis by its plane
+/// the packet's rays enter through (`near`: lo where the packet's direction is positive, hi
+/// elsewhere) and the one they leave through (`far`): bit k set when some ray of the packet may
+/// enter box k, or pass within the margin of it, before `t_far`; `t_near` gets a lower bound of
+/// the rays' entry distances. The margin (make_packet) is an absolute allowance along each axis
+/// of 32ε·(bound + |o|), far more than the rays' own slab tests and the interval products round.
+inline unsigned packet_hit_boxes(const __m256 (&near)[3], const __m256 (&far)[3], const RayPacket& p, float t_far,
+                                 __m256& t_near) noexcept {
     __m256 tn = _mm256_setzero_ps(), tf = _mm256_set1_ps(t_far);
     for (int a = 0; a < 3; ++a) {
         const __m256 margin = _mm256_set1_ps(p.margin[a]);
-        const __m256 dn =
-            _mm256_sub_ps(_mm256_load_ps(plane<float>(n, p.near_plane[a])), _mm256_set1_ps(p.entry_org[a]));
-        const __m256 df = _mm256_sub_ps(_mm256_load_ps(plane<float>(n, p.far_plane[a])), _mm256_set1_ps(p.exit_org[a]));
+        const __m256 dn = _mm256_sub_ps(near[a], _mm256_set1_ps(p.entry_org[a]));
+        const __m256 df = _mm256_sub_ps(far[a], _mm256_set1_ps(p.exit_org[a]));
         const __m256 entry = _mm256_min_ps(_mm256_mul_ps(dn, _mm256_set1_ps(p.inv_lo[a])),
                                            _mm256_mul_ps(dn, _mm256_set1_ps(p.inv_hi[a])));
         const __m256 exit = _mm256_max_ps(_mm256_mul_ps(df, _mm256_set1_ps(p.far_lo[a])),
@@ -273,8 +278,28 @@ inline unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPack
         tn = _mm256_max_ps(tn, _mm256_sub_ps(entry, margin));
         tf = _mm256_min_ps(tf, _mm256_add_ps(exit, margin));
     }
-    _mm256_storeu_ps(t_near, tn);
+    t_near = tn;
     return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ)));
+}
+
+/// packet_hit_boxes on a node's 8 children: every child a ray of the packet enters is set.
+inline unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPacket& p, float t_far,
+                                    float (&t_near)[8]) noexcept {
+    const __m256 near[3] = {_mm256_load_ps(plane<float>(n, p.near_plane[0])),
+                            _mm256_load_ps(plane<float>(n, p.near_plane[1])),
+                            _mm256_load_ps(plane<float>(n, p.near_plane[2]))};
+    const __m256 far[3] = {_mm256_load_ps(plane<float>(n, p.far_plane[0])),
+                           _mm256_load_ps(plane<float>(n, p.far_plane[1])),
+                           _mm256_load_ps(plane<float>(n, p.far_plane[2]))};
+    __m256 tn;
+    const unsigned mask = packet_hit_boxes(near, far, p, t_far, tn);
+    _mm256_storeu_ps(t_near, tn);
+    return mask;
+}
+
+/// Whether the packet's rays travel towards +axis `a` (its near planes are the boxes' lo).
+inline bool packet_positive(const RayPacket& p, int a) noexcept {
+    return p.near_plane[a] < sizeof(BvhTree<float>::Node::lo);
 }
 
 /// Which rays of the packet enter child `k` of `n` before their own t_far: hit_children's fast

@@ -88,23 +88,25 @@ inline unsigned finish8(__m256 U, __m256 V, __m256 W, const __m256 (&z)[3], floa
     return lanes;
 }
 
-// The float test with U, V, W as difference_of_products<float> (exact products in double): each
-// lane computes what intersect_sheared computes. For the blocks test_block_avx2 does not trust.
+// The lanes of a block test_block_avx2 does not trust (`trusted` clear) tested with U, V, W as
+// difference_of_products<float> (exact products in double): there each lane computes what
+// intersect_sheared computes; the trusted lanes keep Kahan's U, V, W. So a triangle's result is
+// its own: it does not depend on the other triangles of its block (a packet tests only the
+// triangles its rays may reach, packet.hpp).
 template <bool cull, bool store>
-ISIN_DETAIL_COLD unsigned test_block_exact(const TriangleBlock<float>& b, const TriangleRay<float>& r, float t_max,
-                                           LaneHits<float>& out) noexcept {
-    const Sheared8 p(b, r);
+ISIN_DETAIL_COLD unsigned test_block_exact(const Sheared8& p, __m256 U, __m256 V, __m256 W, __m256 trusted, float Sz,
+                                           float t_max, LaneHits<float>& out) noexcept {
     const Halves X0(p.x[0]), Y0(p.y[0]), X1(p.x[1]), Y1(p.y[1]), X2(p.x[2]), Y2(p.y[2]);
-    const __m256 U = exact_difference_of_products8(X2, Y1, Y2, X1); // WBW: U = Cx·By − Cy·Bx
-    const __m256 V = exact_difference_of_products8(X0, Y2, Y0, X2); // WBW: V = Ax·Cy − Ay·Cx
-    const __m256 W = exact_difference_of_products8(X1, Y0, Y1, X0); // WBW: W = Bx·Ay − By·Ax
-    return finish8<cull, store>(U, V, W, p.z, r.shear.Sz, t_max, out);
+    U = _mm256_blendv_ps(exact_difference_of_products8(X2, Y1, Y2, X1), U, trusted); // WBW: U = Cx·By − Cy·Bx
+    V = _mm256_blendv_ps(exact_difference_of_products8(X0, Y2, Y0, X2), V, trusted); // WBW: V = Ax·Cy − Ay·Cx
+    W = _mm256_blendv_ps(exact_difference_of_products8(X1, Y0, Y1, X0), W, trusted); // WBW: W = Bx·Ay − By·Ax
+    return finish8<cull, store>(U, V, W, p.z, Sz, t_max, out);
 }
 
 // The float test with U, V, W by Kahan's algorithm in float, four operations each. Its sign is
 // exact, so each lane decides as the exact test does, unless a product over- or underflowed
 // float: then det is not finite or an edge function is below 2^-126 in magnitude (exact zeros
-// included), and the block goes to test_block_exact (D7: a vertex at 2e38).
+// included), and that lane is tested exactly (test_block_exact; D7: a vertex at 2e38).
 template <bool cull, bool store>
 inline unsigned test_block_avx2(const TriangleBlock<float>& b, const TriangleRay<float>& r, float t_max,
                                 LaneHits<float>& out) noexcept {
@@ -120,7 +122,7 @@ inline unsigned test_block_avx2(const TriangleBlock<float>& b, const TriangleRay
         _mm256_and_ps(_mm256_cmp_ps(smallest, _mm256_set1_ps(0x1p-126f), _CMP_GE_OQ),
                       _mm256_cmp_ps(_mm256_and_ps(det, magnitude), _mm256_set1_ps(0x1p126f), _CMP_LT_OQ));
     if (!_mm256_testc_ps(trusted, _mm256_castsi256_ps(_mm256_set1_epi32(-1))))
-        return test_block_exact<cull, store>(b, r, t_max, out);
+        return test_block_exact<cull, store>(p, U, V, W, trusted, r.shear.Sz, t_max, out);
     return finish8<cull, store>(U, V, W, p.z, r.shear.Sz, t_max, out);
 }
 
@@ -230,16 +232,16 @@ struct BlockHitLanes {
     __m512i primitive;
 };
 
-// The rays `rays` (lanes of r) against the block's triangles one by one, each triangle's
-// coordinates broadcast over the rays: lane by lane the operations of test_block_avx2, so the
-// same triangles hit with the same t, u, v; many rays entering a leaf together (a packet's) cost
-// one test a triangle instead of one a ray. Triangles the skip mask names hit nothing. A ray
-// for which test_block_avx2 would not trust some triangle of the block (it then tests the whole
-// block exactly) goes into `untrusted`, and its lane is left out of the result. Returns the
-// rays that hit a triangle with 0 < t < t_max; with `nearest`, `out` gets each one's nearest
-// (the least t, of equal t the lowest index: nearest_lane's choice).
+// The rays `rays` (lanes of r) against the block's triangles `triangles` (lanes of the block)
+// one by one, each triangle's coordinates broadcast over the rays: lane by lane the operations of
+// test_block_avx2, so the same triangles hit with the same t, u, v; many rays entering a leaf
+// together (a packet's) cost one test a triangle instead of one a ray. Triangles the skip mask
+// names hit nothing. A ray for which test_block_avx2 would not trust one of these triangles (it
+// then tests that one exactly) goes into `untrusted`, and its lane is left out of the result.
+// Returns the rays that hit one of the triangles with 0 < t < t_max; with `nearest`, `out` gets
+// each one's nearest (the least t, of equal t the lowest index: nearest_lane's choice).
 template <bool cull, bool nearest>
-inline unsigned test_block_rays(const TriangleBlock<float>& b, const ShearedRays& r, unsigned rays,
+inline unsigned test_block_rays(const TriangleBlock<float>& b, const ShearedRays& r, unsigned rays, unsigned triangles,
                                 const std::uint8_t* skip, BlockHitLanes& out, unsigned& untrusted) noexcept {
     if constexpr (nearest) {
         out.t = _mm512_set1_ps(std::numeric_limits<float>::infinity());
@@ -249,11 +251,12 @@ inline unsigned test_block_rays(const TriangleBlock<float>& b, const ShearedRays
     unsigned hit = 0;
     const int axis[3] = {r.kx, r.ky, r.kz};
     unsigned doubtful = 0;
-    for (int k = 0, n = live_lanes(b); k < n; ++k) {
+    for (; triangles; triangles &= triangles - 1) {
+        const int k = lowest_bit(triangles);
+        if (skip && skip[b.primitive[k]]) continue;
         const Sheared16 e([&](int i, int a) { return _mm512_set1_ps(b.v[i][axis[a]][k]); }, r.ox, r.oy, r.oz, r.Sx,
                           r.Sy);
         doubtful |= rays & ~e.trusted();
-        if (skip && skip[b.primitive[k]]) continue; // after its trust, which counts as there
         unsigned ok = rays & e.inside<cull>();
         if (!ok) continue;
         __m512 inv_det;
