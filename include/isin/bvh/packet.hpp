@@ -259,25 +259,30 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
 }
 
 /// The interval slab test of 8 boxes for the whole packet, each box given per axis by its plane
-/// the packet's rays enter through (`near`: lo where the packet's direction is positive, hi
-/// elsewhere) and the one they leave through (`far`): bit k set when some ray of the packet may
-/// enter box k, or pass within the margin of it, before `t_far`; `t_near` gets a lower bound of
-/// the rays' entry distances. The margin (make_packet) is an absolute allowance along each axis
-/// of 32ε·(bound + |o|), far more than the rays' own slab tests and the interval products round.
-inline unsigned packet_hit_boxes(const __m256 (&near)[3], const __m256 (&far)[3], const RayPacket& p, float t_far,
-                                 __m256& t_near) noexcept {
+/// the packet's rays enter through (near: lo where the packet's direction is positive, hi
+/// elsewhere) and the one they leave through (far), as `planes(a, near, far)` sets them: bit k
+/// set when some ray of the packet may enter box k, or pass within the margin of it, before
+/// `t_far`; `t_near` gets a lower bound of the rays' entry distances. The margin (make_packet) is
+/// an absolute allowance along each axis of 32ε·(bound + |o|), far more than the rays' own slab
+/// tests and the interval products round.
+template <class Planes>
+inline unsigned packet_hit_boxes(const Planes& planes, const RayPacket& p, float t_far, __m256& t_near) noexcept {
     __m256 tn = _mm256_setzero_ps(), tf = _mm256_set1_ps(t_far);
-    for (int a = 0; a < 3; ++a) {
+    // Axis by axis, written out: as a loop over arrays of planes, g++ -O2 kept them on the stack.
+    const auto slab = [&](int a) {
+        __m256 near, far;
+        planes(a, near, far);
         const __m256 margin = _mm256_set1_ps(p.margin[a]);
-        const __m256 dn = _mm256_sub_ps(near[a], _mm256_set1_ps(p.entry_org[a]));
-        const __m256 df = _mm256_sub_ps(far[a], _mm256_set1_ps(p.exit_org[a]));
+        const __m256 dn = _mm256_sub_ps(near, _mm256_set1_ps(p.entry_org[a]));
+        const __m256 df = _mm256_sub_ps(far, _mm256_set1_ps(p.exit_org[a]));
         const __m256 entry = _mm256_min_ps(_mm256_mul_ps(dn, _mm256_set1_ps(p.inv_lo[a])),
                                            _mm256_mul_ps(dn, _mm256_set1_ps(p.inv_hi[a])));
         const __m256 exit = _mm256_max_ps(_mm256_mul_ps(df, _mm256_set1_ps(p.far_lo[a])),
                                           _mm256_mul_ps(df, _mm256_set1_ps(p.far_hi[a])));
         tn = _mm256_max_ps(tn, _mm256_sub_ps(entry, margin));
         tf = _mm256_min_ps(tf, _mm256_add_ps(exit, margin));
-    }
+    };
+    slab(0), slab(1), slab(2);
     t_near = tn;
     return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ)));
 }
@@ -285,14 +290,13 @@ inline unsigned packet_hit_boxes(const __m256 (&near)[3], const __m256 (&far)[3]
 /// packet_hit_boxes on a node's 8 children: every child a ray of the packet enters is set.
 inline unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPacket& p, float t_far,
                                     float (&t_near)[8]) noexcept {
-    const __m256 near[3] = {_mm256_load_ps(plane<float>(n, p.near_plane[0])),
-                            _mm256_load_ps(plane<float>(n, p.near_plane[1])),
-                            _mm256_load_ps(plane<float>(n, p.near_plane[2]))};
-    const __m256 far[3] = {_mm256_load_ps(plane<float>(n, p.far_plane[0])),
-                           _mm256_load_ps(plane<float>(n, p.far_plane[1])),
-                           _mm256_load_ps(plane<float>(n, p.far_plane[2]))};
     __m256 tn;
-    const unsigned mask = packet_hit_boxes(near, far, p, t_far, tn);
+    const unsigned mask = packet_hit_boxes(
+        [&](int a, __m256& near, __m256& far) {
+            near = _mm256_load_ps(plane<float>(n, p.near_plane[a]));
+            far = _mm256_load_ps(plane<float>(n, p.far_plane[a]));
+        },
+        p, t_far, tn);
     _mm256_storeu_ps(t_near, tn);
     return mask;
 }

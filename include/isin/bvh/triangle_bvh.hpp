@@ -390,17 +390,16 @@ private:
     // block), the terrain's shadow rays 63 → 60.
     static unsigned triangles_in_reach(const typename TriangleBlocks<float>::Block& block,
                                        const detail::RayPacket& p) noexcept {
-        __m256 near[3], far[3];
-        for (int a = 0; a < 3; ++a) {
+        const auto planes = [&](int a, __m256& near, __m256& far) {
             const __m256 v0 = _mm256_load_ps(block.v[0][a]), v1 = _mm256_load_ps(block.v[1][a]),
                          v2 = _mm256_load_ps(block.v[2][a]);
             const __m256 lo = _mm256_min_ps(_mm256_min_ps(v0, v1), v2), hi = _mm256_max_ps(_mm256_max_ps(v0, v1), v2);
             const bool positive = detail::packet_positive(p, a);
-            near[a] = positive ? lo : hi, far[a] = positive ? hi : lo;
-        }
+            near = positive ? lo : hi, far = positive ? hi : lo;
+        };
         __m256 t_near;
         const unsigned live = (1u << detail::live_lanes(block)) - 1u;
-        return detail::packet_hit_boxes(near, far, p, detail::packet_t_far(p), t_near) & live;
+        return detail::packet_hit_boxes(planes, p, detail::packet_t_far(p), t_near) & live;
     }
 
     // A packet's leaf with the rays in lanes, triangle by triangle (test_block_rays), a group of
