@@ -235,11 +235,8 @@ TEST_CASE("Bvh stream: packets of rays grazing a triangle's corner, within round
         const std::vector<float> limit(rays.size(), 1e4f);
         mismatches += stream_mismatches(bvh, rays, limit);
         for (const auto& r : rays) { // hits of the first triangle the exact test misses
-            const isin::Ray<double> exact{{double(r.origin.x), double(r.origin.y), double(r.origin.z)},
-                                          {double(r.direction.x), double(r.direction.y), double(r.direction.z)}};
-            const isin::Triangle<double> t0{{double(v.x), double(v.y), double(v.z)},
-                                            {double(a.x), double(a.y), double(a.z)},
-                                            {double(b.x), double(b.y), double(b.z)}};
+            const isin::Ray<double> exact{workloads::to_double(r.origin), workloads::to_double(r.direction)};
+            const isin::Triangle<double> t0{workloads::to_double(v), workloads::to_double(a), workloads::to_double(b)};
             const auto h = bvh.intersect(r);
             outside += h && h.primitive == 0 && !isin::intersect_watertight(exact, t0);
         }

@@ -561,10 +561,8 @@ struct MeshWorld {
 
     static std::vector<isin::Triangle<double>> widened(const std::vector<isin::Triangle<T>>& tris) {
         std::vector<isin::Triangle<double>> out;
-        const auto w = [](const isin::Vertex<T>& p) {
-            return isin::Vertex<double>{double(p.x), double(p.y), double(p.z)};
-        };
-        for (const auto& t : tris) out.push_back({w(t.v0), w(t.v1), w(t.v2)});
+        for (const auto& t : tris)
+            out.push_back({workloads::to_double(t.v0), workloads::to_double(t.v1), workloads::to_double(t.v2)});
         return out;
     }
     MeshWorld(std::vector<isin::Triangle<T>> tris, const isin::Vertex<T>& light_at)
@@ -579,7 +577,7 @@ struct MeshWorld {
     bool reference_blocked(const V3L& P, std::uint32_t start) const {
         const V3L Lx = to_ld(light);
         const isin::Vertex<double> Pd{double(P.x), double(P.y), double(P.z)};
-        const isin::Vertex<double> w = isin::Vertex<double>{double(light.x), double(light.y), double(light.z)} - Pd;
+        const isin::Vertex<double> w = workloads::to_double(light) - Pd;
         bool blocked = false;
         (void)reference.for_each_hit(isin::Ray<double>{Pd - 1e-7 * w, w}, 1.0 + 2e-7,
                                      [&](std::uint32_t index, const isin::Hit<double>&) {

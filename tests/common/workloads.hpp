@@ -55,11 +55,17 @@ isin::Vertex<T> random_unit(Rng& rng) {
     }
 }
 
+// A vertex in double, exactly (every float is a double).
+template <class T>
+isin::Vertex<double> to_double(const isin::Vertex<T>& p) {
+    return {double(p.x), double(p.y), double(p.z)};
+}
+
 // Barycentric point of a triangle, computed in double from the (rounded) vertices.
 template <class T>
 isin::Vertex<double> at_barycentric(const isin::Triangle<T>& tri, double u, double v) {
-    auto d = [](const isin::Vertex<T>& p) { return isin::Vertex<double>{double(p.x), double(p.y), double(p.z)}; };
-    return d(tri.v0) + u * (d(tri.v1) - d(tri.v0)) + v * (d(tri.v2) - d(tri.v0));
+    return to_double(tri.v0) + u * (to_double(tri.v1) - to_double(tri.v0)) +
+           v * (to_double(tri.v2) - to_double(tri.v0));
 }
 
 // A ray from `origin` towards the target point (direction normalised in double).
@@ -147,14 +153,14 @@ std::vector<isin::Ray<T>> rays_at_edges(const std::vector<isin::Triangle<T>>& me
                                         std::uint64_t seed) {
     Rng rng(seed);
     std::vector<isin::Ray<T>> rays;
-    auto d = [](const isin::Vertex<T>& p) { return isin::Vertex<double>{double(p.x), double(p.y), double(p.z)}; };
     while (int(rays.size()) < n) {
         const auto& tri = mesh[size_t(uniform(rng, 0, double(mesh.size())))];
         const isin::Vertex<T>* vs[3] = {&tri.v0, &tri.v1, &tri.v2};
         const int k = int(uniform(rng, 0, 3));
         const double s = uniform(rng, 0, 1) < 0.25 ? 0.0 : uniform(rng, 0, 1); // 1 in 4 at a vertex
-        const isin::Vertex<double> target = d(*vs[k]) + s * (d(*vs[(k + 1) % 3]) - d(*vs[k]));
-        const auto N = isin::normalize(isin::normal(isin::Triangle<double>{d(tri.v0), d(tri.v1), d(tri.v2)}));
+        const isin::Vertex<double> target = to_double(*vs[k]) + s * (to_double(*vs[(k + 1) % 3]) - to_double(*vs[k]));
+        const auto N = isin::normalize(
+            isin::normal(isin::Triangle<double>{to_double(tri.v0), to_double(tri.v1), to_double(tri.v2)}));
         const auto dir = random_unit<double>(rng);
         if (isin::dot(dir, N) < 0.2) continue; // front side, not grazing
         rays.push_back(ray_towards<T>(target + distance * dir, target));
