@@ -88,42 +88,57 @@ inline unsigned finish8(__m256 U, __m256 V, __m256 W, const __m256 (&z)[3], floa
     return lanes;
 }
 
-// The lanes of a block test_block_avx2 does not trust (`trusted` clear) tested with U, V, W as
-// difference_of_products<float> (exact products in double): there each lane computes what
-// intersect_sheared computes; the trusted lanes keep Kahan's U, V, W. So a triangle's result is
-// its own: it does not depend on the other triangles of its block (a packet tests only the
-// triangles its rays may reach, packet.hpp).
+// The edge functions U, V, W of the 8 sheared triangles by Kahan's algorithm in float, four
+// operations each (test_block_avx2's fast form).
+struct KahanEdges8 {
+    __m256 U, V, W;
+    explicit KahanEdges8(const Sheared8& p) noexcept
+        : U(kahan_difference_of_products8(p.x[2], p.y[1], p.y[2], p.x[1])),   // WBW: U = Cx·By − Cy·Bx
+          V(kahan_difference_of_products8(p.x[0], p.y[2], p.y[0], p.x[2])),   // WBW: V = Ax·Cy − Ay·Cx
+          W(kahan_difference_of_products8(p.x[1], p.y[0], p.y[1], p.x[0])) {} // WBW: W = Bx·Ay − By·Ax
+};
+
+// The lanes of a block test_block_avx2 does not trust (bits of `trusted` clear) tested with U,
+// V, W as difference_of_products<float> (exact products in double): there each lane computes
+// what intersect_sheared computes; the trusted lanes keep Kahan's U, V, W. So a triangle's
+// result is its own: it does not depend on the other triangles of its block (a packet tests only
+// the triangles its rays may reach, packet.hpp). It shears the block again rather than take
+// test_block_avx2's registers: passing them made the hot path store all nine to the stack
+// (single rays of the terrain 4% slower).
 template <bool cull, bool store>
-ISIN_DETAIL_COLD unsigned test_block_exact(const Sheared8& p, __m256 U, __m256 V, __m256 W, __m256 trusted, float Sz,
+ISIN_DETAIL_COLD unsigned test_block_exact(const TriangleBlock<float>& b, const TriangleRay<float>& r, unsigned trusted,
                                            float t_max, LaneHits<float>& out) noexcept {
+    const Sheared8 p(b, r);
+    const KahanEdges8 kahan(p);
+    const __m256 keep = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+        _mm256_and_si256(_mm256_set1_epi32(int(trusted)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+        _mm256_setzero_si256()));
     const Halves X0(p.x[0]), Y0(p.y[0]), X1(p.x[1]), Y1(p.y[1]), X2(p.x[2]), Y2(p.y[2]);
-    U = _mm256_blendv_ps(exact_difference_of_products8(X2, Y1, Y2, X1), U, trusted); // WBW: U = Cx·By − Cy·Bx
-    V = _mm256_blendv_ps(exact_difference_of_products8(X0, Y2, Y0, X2), V, trusted); // WBW: V = Ax·Cy − Ay·Cx
-    W = _mm256_blendv_ps(exact_difference_of_products8(X1, Y0, Y1, X0), W, trusted); // WBW: W = Bx·Ay − By·Ax
-    return finish8<cull, store>(U, V, W, p.z, Sz, t_max, out);
+    const __m256 U = _mm256_blendv_ps(exact_difference_of_products8(X2, Y1, Y2, X1), kahan.U, keep); // WBW: U
+    const __m256 V = _mm256_blendv_ps(exact_difference_of_products8(X0, Y2, Y0, X2), kahan.V, keep); // WBW: V
+    const __m256 W = _mm256_blendv_ps(exact_difference_of_products8(X1, Y0, Y1, X0), kahan.W, keep); // WBW: W
+    return finish8<cull, store>(U, V, W, p.z, r.shear.Sz, t_max, out);
 }
 
-// The float test with U, V, W by Kahan's algorithm in float, four operations each. Its sign is
-// exact, so each lane decides as the exact test does, unless a product over- or underflowed
-// float: then det is not finite or an edge function is below 2^-126 in magnitude (exact zeros
+// The float test with U, V, W by Kahan's algorithm in float (KahanEdges8). Its sign is exact,
+// so each lane decides as the exact test does, unless a product over- or underflowed float:
+// then det is not finite or an edge function is below 2^-126 in magnitude (exact zeros
 // included), and that lane is tested exactly (test_block_exact; D7: a vertex at 2e38).
 template <bool cull, bool store>
 inline unsigned test_block_avx2(const TriangleBlock<float>& b, const TriangleRay<float>& r, float t_max,
                                 LaneHits<float>& out) noexcept {
     const Sheared8 p(b, r);
-    const __m256 U = kahan_difference_of_products8(p.x[2], p.y[1], p.y[2], p.x[1]); // WBW: U = Cx·By − Cy·Bx
-    const __m256 V = kahan_difference_of_products8(p.x[0], p.y[2], p.y[0], p.x[2]); // WBW: V = Ax·Cy − Ay·Cx
-    const __m256 W = kahan_difference_of_products8(p.x[1], p.y[0], p.y[1], p.x[0]); // WBW: W = Bx·Ay − By·Ax
+    const KahanEdges8 e(p);
     const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-    const __m256 smallest = _mm256_min_ps(_mm256_min_ps(_mm256_and_ps(U, magnitude), _mm256_and_ps(V, magnitude)),
-                                          _mm256_and_ps(W, magnitude));
-    const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
+    const __m256 smallest = _mm256_min_ps(_mm256_min_ps(_mm256_and_ps(e.U, magnitude), _mm256_and_ps(e.V, magnitude)),
+                                          _mm256_and_ps(e.W, magnitude));
+    const __m256 det = _mm256_add_ps(_mm256_add_ps(e.U, e.V), e.W);
     const __m256 trusted =
         _mm256_and_ps(_mm256_cmp_ps(smallest, _mm256_set1_ps(0x1p-126f), _CMP_GE_OQ),
                       _mm256_cmp_ps(_mm256_and_ps(det, magnitude), _mm256_set1_ps(0x1p126f), _CMP_LT_OQ));
-    if (!_mm256_testc_ps(trusted, _mm256_castsi256_ps(_mm256_set1_epi32(-1))))
-        return test_block_exact<cull, store>(p, U, V, W, trusted, r.shear.Sz, t_max, out);
-    return finish8<cull, store>(U, V, W, p.z, r.shear.Sz, t_max, out);
+    const unsigned trusted_lanes = unsigned(_mm256_movemask_ps(trusted));
+    if (trusted_lanes != 0xffu) return test_block_exact<cull, store>(b, r, trusted_lanes, t_max, out);
+    return finish8<cull, store>(e.U, e.V, e.W, p.z, r.shear.Sz, t_max, out);
 }
 
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
