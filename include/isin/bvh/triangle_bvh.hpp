@@ -249,8 +249,10 @@ private:
     static void keep_nearest(const Hit<T>& hit, T& t_far, Hit<T>& best) noexcept {
         if (hit.t > best.t || (hit.t == best.t && hit.primitive > best.primitive)) return;
         best = hit;
-        t_far = best.t + best.t * T(0x1p-16);
+        t_far = best.t * tie_room;
     }
+    // The traversal's bound over a hit's t: t·(1 + 2⁻¹⁶), one rounding (take_nearest).
+    static constexpr T tie_room = T(1) + T(0x1p-16);
 
     // Up to 16 rays of a stream: nearest hits (visit = nearest, into hits) or occlusion (into
     // blocked). Coherent rays go as a packet (packet.hpp), the others one by one.
@@ -280,6 +282,21 @@ private:
     }
 
 #if defined(ISIN_DETAIL_PACKETS)
+    // A packet's nearest hits, lane by lane: rays_in_lanes keeps 16 at a time (keep_nearest in
+    // lanes), the other leaf paths one (`keep`). They go to the caller's array when the packet is
+    // done.
+    struct alignas(64) NearestLanes {
+        float t[16], u[16], v[16];
+        std::uint32_t primitive[16];
+        // keep_nearest on lane k with the hits `take(hit, t_far)` keeps.
+        template <class Take>
+        void keep(int k, float& t_far, const Take& take) noexcept {
+            Hit<float> best{t[k], u[k], v[k], primitive[k]};
+            take(best, t_far);
+            t[k] = best.t, u[k] = best.u, v[k] = best.v, primitive[k] = best.primitive;
+        }
+    };
+
     // The packet part of trace_chunk (float): returns the rays it traced.
     template <Visit visit, class Rays>
     ISIN_DETAIL_NOINLINE unsigned trace_packet(const Rays& rays, std::size_t first, int n, const float* t_max,
@@ -312,16 +329,21 @@ private:
         unsigned made = 0;         // the lanes of tri constructed
         detail::ShearLanes shears; // all the rays' shears at once, when the first leaf is reached
         bool shears_made = false;
-        Hit<float>* const best = visit == Visit::nearest ? hits + first : nullptr; // null: no hits asked
-        if constexpr (visit == Visit::nearest)
-            for (unsigned l = lanes; l; l &= l - 1) best[detail::lowest_bit(l)] = Hit<float>{};
+        NearestLanes nearest;
+        if constexpr (visit == Visit::nearest) { // Hit<float>{}: no hit
+            const Hit<float> none;
+            for (int k = 0; k < size; ++k)
+                nearest.t[k] = none.t, nearest.u[k] = none.u, nearest.v[k] = none.v,
+                nearest.primitive[k] = none.primitive;
+        }
         const auto walk = [&](auto cull) {
             constexpr bool culls = decltype(cull)::value;
             detail::walk_packet<visit>(tree_, p, [&](std::uint32_t leaf, unsigned active, float(&t_far)[16]) {
                 if (!shears_made) detail::set_shears(c[3], c[4], c[5], shears), shears_made = true;
                 unsigned done = 0;
 #if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
-                active = rays_in_lanes<culls, visit>(blocks_[leaf], p, shears, active, t_far, best, filter.skip, done);
+                active =
+                    rays_in_lanes<culls, visit>(blocks_[leaf], p, shears, active, t_far, nearest, filter.skip, done);
 #endif
                 for (unsigned fresh = active & ~made; fresh; fresh &= fresh - 1) {
                     const int k = detail::lowest_bit(fresh);
@@ -346,8 +368,11 @@ private:
                     const unsigned lk = skip_lanes(block, both & 0xffu, filter.skip),
                                    lj = skip_lanes(block, both >> 8, filter.skip);
                     if constexpr (visit == Visit::nearest) {
-                        if (lk) keep_nearest(block, lk, hk, t_far[k], best[k]);
-                        if (lj) keep_nearest(block, lj, hj, t_far[j], best[j]);
+                        const auto keep_block = [&block](const detail::LaneHits<float>& h, unsigned l) {
+                            return [&block, &h, l](Hit<float>& best, float& t) { keep_nearest(block, l, h, t, best); };
+                        };
+                        if (lk) nearest.keep(k, t_far[k], keep_block(hk, lk));
+                        if (lj) nearest.keep(j, t_far[j], keep_block(hj, lj));
                     } else {
                         done |= (lk ? 1u << k : 0u) | (lj ? 1u << j : 0u);
                     }
@@ -356,7 +381,9 @@ private:
                 for (; active; active &= active - 1) {
                     const int k = detail::lowest_bit(active);
                     if constexpr (visit == Visit::nearest) {
-                        take_nearest<culls>(leaf, tri[k], t_far[k], best[k], filter.skip);
+                        nearest.keep(k, t_far[k], [&](Hit<float>& best, float& t) {
+                            take_nearest<culls>(leaf, tri[k], t, best, filter.skip);
+                        });
                     } else {
                         detail::LaneHits<float> unused;
                         if (filter.skip ? lanes_hit<culls>(leaf, tri[k], t_far[k], unused, filter.skip) != 0
@@ -372,6 +399,12 @@ private:
             walk(std::true_type{});
         else
             walk(std::false_type{});
+        if constexpr (visit == Visit::nearest)
+            for (unsigned l = lanes; l; l &= l - 1) {
+                const int k = detail::lowest_bit(l);
+                hits[first + std::size_t(k)] =
+                    Hit<float>{nearest.t[k], nearest.u[k], nearest.v[k], nearest.primitive[k]};
+            }
         if constexpr (visit == Visit::any)
             for (unsigned l = lanes; l; l &= l - 1) {
                 const int k = detail::lowest_bit(l);
@@ -398,8 +431,11 @@ private:
             near = positive ? lo : hi, far = positive ? hi : lo;
         };
         __m256 t_near;
-        const unsigned live = (1u << detail::live_lanes(block)) - 1u;
-        return detail::packet_hit_boxes(planes, p, detail::packet_t_far(p), t_near) & live;
+        // Not the padding (is_padding: lanes after the first that repeat its triangle), in one compare.
+        const unsigned padding = unsigned(_mm256_movemask_ps(
+            _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(block.primitive)),
+                                                   _mm256_set1_epi32(int(block.primitive[0]))))));
+        return detail::packet_hit_boxes(planes, p, detail::packet_t_far(p), t_near) & ~(padding & 0xfeu);
     }
 
     // A packet's leaf with the rays in lanes, triangle by triangle (test_block_rays), a group of
@@ -411,13 +447,13 @@ private:
     // 0.97-1.21 / 1.04-1.07, soup 1.18-1.22 / 0.97-1.00. Every group in lanes: the same within
     // noise, but soup shadows 0.85; groups of at least as many rays as triangles: the same but 1.3M
     // primary 0.86-1.06.
-    // Nearest hits go into `best` and lower t_far; occluded rays into `done`. Returns the rays left
+    // Nearest hits go into `best` (keep_nearest in lanes) and lower t_far; occluded rays into `done`. Returns the rays left
     // for one by one: those groups, the rays some triangle's test is not trusted for, and the
     // rays without a shear.
     template <bool cull, Visit visit>
     static unsigned rays_in_lanes(const typename TriangleBlocks<float>::Block& block, const detail::RayPacket& p,
                                   const detail::ShearLanes& shears, unsigned active, float (&t_far)[16],
-                                  Hit<float>* best, const std::uint8_t* skip, unsigned& done) noexcept {
+                                  NearestLanes& best, const std::uint8_t* skip, unsigned& done) noexcept {
         const unsigned triangles = triangles_in_reach(block, p);
         if (!triangles) return active & ~shears.usable; // no ray of the packet comes near one
         const int count = detail::bit_count(triangles);
@@ -442,14 +478,16 @@ private:
                                                                                         skip, nearest, one_by_one);
             if constexpr (visit == Visit::nearest) {
                 if (!hit) continue;
-                alignas(64) float t[16], u[16], v[16];
-                alignas(64) std::uint32_t index[16];
-                _mm512_store_ps(t, nearest.t), _mm512_store_ps(u, nearest.u), _mm512_store_ps(v, nearest.v);
-                _mm512_store_si512(index, nearest.primitive);
-                for (unsigned h = hit; h; h &= h - 1) {
-                    const int k = detail::lowest_bit(h);
-                    keep_nearest(Hit<float>{t[k], u[k], v[k], index[k]}, t_far[k], best[k]);
-                }
+                // keep_nearest's rule lane by lane: nearer, or as near with an index no higher.
+                const __m512 best_t = _mm512_load_ps(best.t);
+                const __mmask16 keep = __mmask16(
+                    hit & (unsigned(_mm512_cmp_ps_mask(nearest.t, best_t, _CMP_LT_OQ)) |
+                           (unsigned(_mm512_cmp_ps_mask(nearest.t, best_t, _CMP_EQ_OQ)) &
+                            unsigned(_mm512_cmple_epu32_mask(nearest.primitive, _mm512_load_si512(best.primitive))))));
+                _mm512_mask_store_ps(best.t, keep, nearest.t), _mm512_mask_store_ps(best.u, keep, nearest.u);
+                _mm512_mask_store_ps(best.v, keep, nearest.v);
+                _mm512_mask_store_epi32(best.primitive, keep, nearest.primitive);
+                _mm512_mask_storeu_ps(t_far, keep, _mm512_mul_ps(nearest.t, _mm512_set1_ps(tie_room)));
             } else {
                 done |= hit;
             }
