@@ -757,6 +757,85 @@ TEST_CASE_TEMPLATE("BvhTree with the caller's leaf: spheres found as brute force
     CHECK(differ == 0);
 }
 
+TEST_CASE_TEMPLATE("traverse_pair: each ray visits the leaves traverse visits, in the same order, with the same stops",
+                   T, float, double) {
+    // Spheres in a BvhTree; rays of every kind (ordinary, axis-parallel and tiny components: the
+    // robust slab test; NaN, zero direction, t_max ≤ 0: no walk), paired at random. Nearest: the
+    // leaf lowers t_max to its nearest sphere; any: a leaf stops the walk when its index is a
+    // multiple of 5. Each ray's visits, t_max and stop must be those of traverse alone.
+    std::mt19937_64 rng(8);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    std::vector<isin::Sphere<T>> spheres;
+    for (int i = 0; i < 3000; ++i)
+        spheres.push_back({{T(uni(rng) * 20), T(uni(rng) * 20), T(uni(rng) * 20)}, T(0.2 + 0.3 * (uni(rng) + 1))});
+    const auto tree = isin::build_bvh<T>(spheres.size(), [&](std::size_t i) {
+        const auto& s = spheres[i];
+        isin::Box<T> b;
+        b.grow(s.center - isin::Vertex<T>{s.radius, s.radius, s.radius});
+        b.grow(s.center + isin::Vertex<T>{s.radius, s.radius, s.radius});
+        return b;
+    });
+    const T nan = std::numeric_limits<T>::quiet_NaN(), inf = std::numeric_limits<T>::infinity();
+    const auto random_ray = [&]() -> std::pair<isin::Ray<T>, T> {
+        isin::Ray<T> ray{{T(uni(rng) * 25), T(uni(rng) * 25), T(uni(rng) * 25)},
+                         {T(uni(rng)), T(uni(rng)), T(uni(rng))}};
+        T t_max = inf;
+        switch (rng() % 10) {
+        case 0: ray.direction.y = T(0), ray.direction.z = T(-0.0); break; // axis-parallel: robust
+        case 1: ray.direction.x = T(1e-30); break;                        // tiny: robust
+        case 2: ray.direction = {nan, T(1), T(0)}; break;
+        case 3: ray.direction = {T(0), T(0), T(0)}; break;
+        case 4: t_max = T(rng() % 2 ? 0 : 10); break;
+        default: break;
+        }
+        return {ray, t_max};
+    };
+    // A leaf test that records its visits.
+    struct Recorder {
+        const std::vector<isin::Sphere<T>>* spheres;
+        const isin::BvhTree<T>* tree;
+        const isin::Ray<T>* ray;
+        bool any;
+        std::vector<std::uint32_t> visits;
+        bool operator()(std::uint32_t leaf, T& t_max) {
+            visits.push_back(leaf);
+            if (any) return leaf % 5 == 0;
+            const auto& l = tree->leaves()[leaf];
+            for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
+                const auto h = isin::intersect(*ray, (*spheres)[tree->primitives()[j]]);
+                if (h.t < t_max) t_max = h.t;
+            }
+            return false;
+        }
+    };
+    int interleaved = 0, stops = 0;
+    for (const bool any : {false, true})
+        for (int n = 0; n < 1500; ++n) {
+            const auto [a, limit_a] = random_ray();
+            const auto [b, limit_b] = random_ray();
+            Recorder alone_a{&spheres, &tree, &a, any, {}}, alone_b{&spheres, &tree, &b, any, {}};
+            Recorder pair_a = alone_a, pair_b = alone_b;
+            T t_a = limit_a, t_b = limit_b, u_a = limit_a, u_b = limit_b;
+            const bool stop_a = any ? isin::traverse<isin::Visit::any>(tree, a, t_a, alone_a)
+                                    : isin::traverse<isin::Visit::nearest>(tree, a, t_a, alone_a);
+            const bool stop_b = any ? isin::traverse<isin::Visit::any>(tree, b, t_b, alone_b)
+                                    : isin::traverse<isin::Visit::nearest>(tree, b, t_b, alone_b);
+            const unsigned stopped =
+                any ? isin::traverse_pair<isin::Visit::any>(tree, a, u_a, pair_a, b, u_b, pair_b)
+                    : isin::traverse_pair<isin::Visit::nearest>(tree, a, u_a, pair_a, b, u_b, pair_b);
+            CHECK(pair_a.visits == alone_a.visits);
+            CHECK(pair_b.visits == alone_b.visits);
+            CHECK(std::memcmp(&u_a, &t_a, sizeof(T)) == 0);
+            CHECK(std::memcmp(&u_b, &t_b, sizeof(T)) == 0);
+            CHECK(stopped == ((stop_a ? 1u : 0u) | (stop_b ? 2u : 0u)));
+            interleaved += !alone_a.visits.empty() && !alone_b.visits.empty();
+            stops += stop_a + stop_b;
+        }
+    MESSAGE(interleaved, " pairs both walked, ", stops, " stops");
+    CHECK(interleaved > 500); // not vacuous
+    CHECK(stops > 300);
+}
+
 TEST_CASE_TEMPLATE("BvhTree: nodes and leaves hold each usable primitive once, inside every box above it", T, float,
                    double) {
     using Tree = isin::BvhTree<T>;

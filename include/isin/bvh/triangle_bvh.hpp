@@ -101,10 +101,7 @@ public:
         T t = t_max;
         detail::TriangleRay<T> r(ray);
         const auto nearest = [&](auto cull) {
-            traverse<Visit::nearest>(tree_, ray, t, [&](std::uint32_t leaf, T& t_far) {
-                take_nearest<decltype(cull)::value>(leaf, r, t_far, best, filter.skip);
-                return false;
-            });
+            traverse<Visit::nearest>(tree_, ray, t, nearest_leaf<decltype(cull)::value>(r, best, filter.skip));
         };
         if (filter.cull_backfaces)
             nearest(std::true_type{});
@@ -121,11 +118,7 @@ public:
         T t = t_max;
         detail::TriangleRay<T> r(ray);
         const auto any = [&](auto cull) {
-            return traverse<Visit::any>(tree_, ray, t, [&](std::uint32_t leaf, T& t_far) {
-                detail::LaneHits<T> unused;
-                return r.ready() &&
-                       detail::test_block<decltype(cull)::value, false>(blocks_[leaf], r, t_far, unused) != 0;
-            });
+            return traverse<Visit::any>(tree_, ray, t, any_leaf<decltype(cull)::value>(r));
         };
         return filter.cull_backfaces ? any(std::true_type{}) : any(std::false_type{});
     }
@@ -227,6 +220,52 @@ public:
     }
 
 private:
+    // The leaf test of a nearest-hit walk: the leaf's nearest hit into `best` (take_nearest).
+    template <bool cull>
+    auto nearest_leaf(detail::TriangleRay<T>& r, Hit<T>& best, const std::uint8_t* skip) const noexcept {
+        return [this, &r, &best, skip](std::uint32_t leaf, T& t_far) {
+            take_nearest<cull>(leaf, r, t_far, best, skip);
+            return false;
+        };
+    }
+    // The leaf test of an any-hit walk without a skip mask: true (stop) when the leaf is hit.
+    template <bool cull>
+    auto any_leaf(detail::TriangleRay<T>& r) const noexcept {
+        return [this, &r](std::uint32_t leaf, T& t_far) {
+            detail::LaneHits<T> unused;
+            return r.ready() && detail::test_block<cull, false>(blocks_[leaf], r, t_far, unused) != 0;
+        };
+    }
+
+    // intersect(a, limit_a, filter) and intersect(b, limit_b, filter) into hit_a and hit_b, the
+    // two walks interleaved (traverse_pair).
+    void intersect_pair(const Ray<T>& a, T limit_a, const Ray<T>& b, T limit_b, const HitFilter& filter, Hit<T>& hit_a,
+                        Hit<T>& hit_b) const noexcept {
+        Hit<T> best_a, best_b;
+        detail::TriangleRay<T> ra(a), rb(b);
+        const auto both = [&](auto cull) {
+            constexpr bool c = decltype(cull)::value;
+            traverse_pair<Visit::nearest>(tree_, a, limit_a, nearest_leaf<c>(ra, best_a, filter.skip), b, limit_b,
+                                          nearest_leaf<c>(rb, best_b, filter.skip));
+        };
+        if (filter.cull_backfaces)
+            both(std::true_type{});
+        else
+            both(std::false_type{});
+        hit_a = best_a, hit_b = best_b;
+    }
+    // occluded(a, limit_a, filter) in bit 0 and occluded(b, limit_b, filter) in bit 1, the two
+    // walks interleaved; the filter has no skip mask.
+    unsigned occluded_pair(const Ray<T>& a, T limit_a, const Ray<T>& b, T limit_b,
+                           const HitFilter& filter) const noexcept {
+        detail::TriangleRay<T> ra(a), rb(b);
+        const auto both = [&](auto cull) {
+            constexpr bool c = decltype(cull)::value;
+            return traverse_pair<Visit::any>(tree_, a, limit_a, any_leaf<c>(ra), b, limit_b, any_leaf<c>(rb));
+        };
+        return filter.cull_backfaces ? both(std::true_type{}) : both(std::false_type{});
+    }
+
     // The nearest hit of leaf `leaf` into `best` when it is nearer than best, or ties with it
     // with a lower index. The traversal's bound then stays a little beyond the hit (2⁻¹⁶ of
     // its t): a box's computed entry and a triangle's computed t each round a few ulps their own
@@ -269,14 +308,27 @@ private:
 #else
         (void)try_packet;
 #endif
-        for (int k = 0; k < n; ++k) {
-            if ((packed >> k) & 1u) continue;
-            const std::size_t i = first + std::size_t(k);
-            const T limit = t_max ? t_max[i] : std::numeric_limits<T>::infinity();
-            if constexpr (visit == Visit::nearest)
-                hits[i] = intersect(rays[i], limit, filter);
-            else
-                blocked[i] = occluded(rays[i], limit, filter) ? 1 : 0;
+        // The others two at a time, their walks interleaved (traverse_pair), the last one alone.
+        const auto limit = [t_max](std::size_t i) { return t_max ? t_max[i] : std::numeric_limits<T>::infinity(); };
+        for (unsigned rest = ~packed & ((1u << n) - 1u); rest;) {
+            const std::size_t i = first + std::size_t(detail::lowest_bit(rest));
+            rest &= rest - 1;
+            const bool pair = rest && (visit == Visit::nearest || !filter.skip);
+            if (!pair) {
+                if constexpr (visit == Visit::nearest)
+                    hits[i] = intersect(rays[i], limit(i), filter);
+                else
+                    blocked[i] = occluded(rays[i], limit(i), filter) ? 1 : 0;
+                continue;
+            }
+            const std::size_t j = first + std::size_t(detail::lowest_bit(rest));
+            rest &= rest - 1;
+            if constexpr (visit == Visit::nearest) {
+                intersect_pair(rays[i], limit(i), rays[j], limit(j), filter, hits[i], hits[j]);
+            } else {
+                const unsigned both = occluded_pair(rays[i], limit(i), rays[j], limit(j), filter);
+                blocked[i] = both & 1u ? 1 : 0, blocked[j] = both & 2u ? 1 : 0;
+            }
         }
         return packed != 0;
     }
