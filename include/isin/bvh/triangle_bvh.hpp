@@ -127,7 +127,7 @@ public:
     /// the same hits bit for bit. Rays are taken 16 at a time; 16 consecutive rays that start
     /// close together and point the same way (a 4×4 tile of camera rays, shadow rays from such a
     /// tile towards one light) are traced as one packet (float with AVX2 + FMA), faster than
-    /// one by one; rays that are not go one by one, no slower than intersect(ray).
+    /// one by one; rays that are not go two at a time with their walks interleaved (traverse_pair).
     void intersect(const Ray<T>* rays, std::size_t count, Hit<T>* hits, const HitFilter& filter = {}) const noexcept {
         intersect(rays, count, nullptr, hits, filter);
     }
@@ -294,7 +294,7 @@ private:
     static constexpr T tie_room = T(1) + T(0x1p-16);
 
     // Up to 16 rays of a stream: nearest hits (visit = nearest, into hits) or occlusion (into
-    // blocked). Coherent rays go as a packet (packet.hpp), the others one by one.
+    // blocked). Coherent rays go as a packet (packet.hpp), the others two at a time (traverse_pair).
     // Returns whether a packet was traced.
     template <Visit visit, class Rays>
     bool trace_chunk(const Rays& rays, std::size_t first, int n, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
@@ -340,12 +340,16 @@ private:
     struct alignas(64) NearestLanes {
         float t[16], u[16], v[16];
         std::uint32_t primitive[16];
+        Hit<float> at(int k) const noexcept { return Hit<float>{t[k], u[k], v[k], primitive[k]}; }
+        void set(int k, const Hit<float>& h) noexcept {
+            t[k] = h.t, u[k] = h.u, v[k] = h.v, primitive[k] = h.primitive;
+        }
         // keep_nearest on lane k with the hits `take(hit, t_far)` keeps.
         template <class Take>
         void keep(int k, float& t_far, const Take& take) noexcept {
-            Hit<float> best{t[k], u[k], v[k], primitive[k]};
+            Hit<float> best = at(k);
             take(best, t_far);
-            t[k] = best.t, u[k] = best.u, v[k] = best.v, primitive[k] = best.primitive;
+            set(k, best);
         }
     };
 
@@ -382,12 +386,8 @@ private:
         detail::ShearLanes shears; // all the rays' shears at once, when the first leaf is reached
         bool shears_made = false;
         NearestLanes nearest;
-        if constexpr (visit == Visit::nearest) { // Hit<float>{}: no hit
-            const Hit<float> none;
-            for (int k = 0; k < size; ++k)
-                nearest.t[k] = none.t, nearest.u[k] = none.u, nearest.v[k] = none.v,
-                nearest.primitive[k] = none.primitive;
-        }
+        if constexpr (visit == Visit::nearest)
+            for (int k = 0; k < size; ++k) nearest.set(k, Hit<float>{}); // no hit
         const auto walk = [&](auto cull) {
             constexpr bool culls = decltype(cull)::value;
             detail::walk_packet<visit>(tree_, p, [&](std::uint32_t leaf, unsigned active, float(&t_far)[16]) {
@@ -454,8 +454,7 @@ private:
         if constexpr (visit == Visit::nearest)
             for (unsigned l = lanes; l; l &= l - 1) {
                 const int k = detail::lowest_bit(l);
-                hits[first + std::size_t(k)] =
-                    Hit<float>{nearest.t[k], nearest.u[k], nearest.v[k], nearest.primitive[k]};
+                hits[first + std::size_t(k)] = nearest.at(k);
             }
         if constexpr (visit == Visit::any)
             for (unsigned l = lanes; l; l &= l - 1) {
@@ -499,8 +498,8 @@ private:
     // 0.97-1.21 / 1.04-1.07, soup 1.18-1.22 / 0.97-1.00. Every group in lanes: the same within
     // noise, but soup shadows 0.85; groups of at least as many rays as triangles: the same but 1.3M
     // primary 0.86-1.06.
-    // Nearest hits go into `best` (keep_nearest in lanes) and lower t_far; occluded rays into `done`. Returns the rays left
-    // for one by one: those groups, the rays some triangle's test is not trusted for, and the
+    // Nearest hits go into `best` (keep_nearest in lanes) and lower t_far; occluded rays into
+    // `done`. Returns the rays left for one by one: those groups, the rays some triangle's test is not trusted for, and the
     // rays without a shear.
     template <bool cull, Visit visit>
     static unsigned rays_in_lanes(const typename TriangleBlocks<float>::Block& block, const detail::RayPacket& p,
