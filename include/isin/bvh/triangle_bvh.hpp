@@ -100,13 +100,9 @@ public:
         Hit<T> best;
         T t = t_max;
         detail::TriangleRay<T> r(ray);
-        const auto nearest = [&](auto cull) {
+        with_cull(filter, [&](auto cull) {
             traverse<Visit::nearest>(tree_, ray, t, nearest_leaf<decltype(cull)::value>(r, best, filter.skip));
-        };
-        if (filter.cull_backfaces)
-            nearest(std::true_type{});
-        else
-            nearest(std::false_type{});
+        });
         return best;
     }
 
@@ -117,10 +113,8 @@ public:
                 ray, t_max, [](std::uint32_t, const Hit<T>&) { return false; }, filter);
         T t = t_max;
         detail::TriangleRay<T> r(ray);
-        const auto any = [&](auto cull) {
-            return traverse<Visit::any>(tree_, ray, t, any_leaf<decltype(cull)::value>(r));
-        };
-        return filter.cull_backfaces ? any(std::true_type{}) : any(std::false_type{});
+        return with_cull(
+            filter, [&](auto cull) { return traverse<Visit::any>(tree_, ray, t, any_leaf<decltype(cull)::value>(r)); });
     }
 
     /// Nearest hits of a stream of rays: hits[i] = intersect(rays[i], ∞, filter) for i < count,
@@ -160,7 +154,7 @@ public:
     bool for_each_hit(const Ray<T>& ray, T t_max, F&& f, const HitFilter& filter = {}) const {
         T t = t_max;
         detail::TriangleRay<T> r(ray);
-        const auto all = [&](auto cull) {
+        return with_cull(filter, [&](auto cull) {
             return traverse<Visit::any>(tree_, ray, t, [&](std::uint32_t leaf, T& t_far) {
                 detail::LaneHits<T> hits;
                 unsigned lanes = lanes_hit<decltype(cull)::value>(leaf, r, t_far, hits, filter.skip);
@@ -173,8 +167,7 @@ public:
                 }
                 return false;
             });
-        };
-        return filter.cull_backfaces ? all(std::true_type{}) : all(std::false_type{});
+        });
     }
 
     /// Updates the Bvh after the triangles moved (same count, same order): the boxes and blocks
@@ -220,6 +213,13 @@ public:
     }
 
 private:
+    // f(std::true_type{}) when the filter culls back faces, f(std::false_type{}) otherwise: each
+    // leaf test is compiled both ways, so that no walk tests the flag at its leaves.
+    template <class F>
+    static decltype(auto) with_cull(const HitFilter& filter, F&& f) {
+        return filter.cull_backfaces ? f(std::true_type{}) : f(std::false_type{});
+    }
+
     // The leaf test of a nearest-hit walk: the leaf's nearest hit into `best` (take_nearest).
     template <bool cull>
     auto nearest_leaf(detail::TriangleRay<T>& r, Hit<T>& best, const std::uint8_t* skip) const noexcept {
@@ -243,15 +243,11 @@ private:
                         Hit<T>& hit_b) const noexcept {
         Hit<T> best_a, best_b;
         detail::TriangleRay<T> ra(a), rb(b);
-        const auto both = [&](auto cull) {
+        with_cull(filter, [&](auto cull) {
             constexpr bool c = decltype(cull)::value;
             traverse_pair<Visit::nearest>(tree_, a, limit_a, nearest_leaf<c>(ra, best_a, filter.skip), b, limit_b,
                                           nearest_leaf<c>(rb, best_b, filter.skip));
-        };
-        if (filter.cull_backfaces)
-            both(std::true_type{});
-        else
-            both(std::false_type{});
+        });
         hit_a = best_a, hit_b = best_b;
     }
     // occluded(a, limit_a, filter) in bit 0 and occluded(b, limit_b, filter) in bit 1, the two
@@ -259,11 +255,10 @@ private:
     unsigned occluded_pair(const Ray<T>& a, T limit_a, const Ray<T>& b, T limit_b,
                            const HitFilter& filter) const noexcept {
         detail::TriangleRay<T> ra(a), rb(b);
-        const auto both = [&](auto cull) {
+        return with_cull(filter, [&](auto cull) {
             constexpr bool c = decltype(cull)::value;
             return traverse_pair<Visit::any>(tree_, a, limit_a, any_leaf<c>(ra), b, limit_b, any_leaf<c>(rb));
-        };
-        return filter.cull_backfaces ? both(std::true_type{}) : both(std::false_type{});
+        });
     }
 
     // The nearest hit of leaf `leaf` into `best` when it is nearer than best, or ties with it
@@ -447,10 +442,7 @@ private:
                 return done;
             });
         };
-        if (filter.cull_backfaces)
-            walk(std::true_type{});
-        else
-            walk(std::false_type{});
+        with_cull(filter, walk);
         if constexpr (visit == Visit::nearest)
             for (unsigned l = lanes; l; l &= l - 1) {
                 const int k = detail::lowest_bit(l);
@@ -499,8 +491,8 @@ private:
     // noise, but soup shadows 0.85; groups of at least as many rays as triangles: the same but 1.3M
     // primary 0.86-1.06.
     // Nearest hits go into `best` (keep_nearest in lanes) and lower t_far; occluded rays into
-    // `done`. Returns the rays left for one by one: those groups, the rays some triangle's test is not trusted for, and the
-    // rays without a shear.
+    // `done`. Returns the rays left for one by one: those groups, the rays some triangle's test
+    // is not trusted for, and the rays without a shear.
     template <bool cull, Visit visit>
     static unsigned rays_in_lanes(const typename TriangleBlocks<float>::Block& block, const detail::RayPacket& p,
                                   const detail::ShearLanes& shears, unsigned active, float (&t_far)[16],
