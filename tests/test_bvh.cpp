@@ -673,6 +673,54 @@ TEST_CASE_TEMPLATE("BVH for_each_hit: every triangle hit in (0, t_max) once, as 
     CHECK(rays_with_many > 20);
 }
 
+TEST_CASE_TEMPLATE("BvhTree::leaf_scale: the geometric mean of the leaves' largest extents, kept by refit", T, float,
+                   double) {
+    // 64 boxes 10 apart, one leaf each: half are cubes of side 1, half flat boxes 4 long in y.
+    std::vector<isin::Box<T>> boxes;
+    for (int i = 0; i < 64; ++i) {
+        const isin::Vertex<T> c{T(10 * (i % 8)), T(10 * (i / 8)), T(0)};
+        const isin::Vertex<T> h = i % 2 ? isin::Vertex<T>{T(0.5), T(2), T(0)} : isin::Vertex<T>{T(0.5), T(0.5), T(0.5)};
+        isin::Box<T> b;
+        b.grow(c - h), b.grow(c + h);
+        boxes.push_back(b);
+    }
+    isin::BvhOptions one;
+    one.leaf_size = 1;
+    auto tree = isin::build_bvh<T>(
+        boxes.size(), [&](std::size_t i) { return boxes[i]; }, one);
+    CHECK(tree.leaf_scale() == T(2)); // 2^((0 + 2) / 2)
+    // refit with every box twice as large: sides 2 and 8
+    tree.refit([&](std::uint32_t i) {
+        const isin::Vertex<T> c = (boxes[i].lo + boxes[i].hi) * T(0.5);
+        isin::Box<T> b;
+        b.grow(c + (boxes[i].lo - c) * T(2)), b.grow(c + (boxes[i].hi - c) * T(2));
+        return b;
+    });
+    CHECK(tree.leaf_scale() == T(4));
+    // Leaves that are points do not count; a tree of points only, and an empty one, measure 0.
+    isin::Box<T> point;
+    point.grow(isin::Vertex<T>{1, 2, 3});
+    boxes.push_back(point);
+    CHECK(isin::build_bvh<T>(
+              boxes.size(), [&](std::size_t i) { return boxes[i]; }, one)
+              .leaf_scale() == T(2));
+    CHECK(isin::build_bvh<T>(std::vector<isin::Box<T>>{point, point}).leaf_scale() == T(0));
+    CHECK(isin::build_bvh<T>(std::vector<isin::Box<T>>{}).leaf_scale() == T(0));
+    // The parallel build (from 32768 primitives) measures it too: unit cubes on a grid.
+    std::vector<isin::Box<T>> cubes;
+    for (int i = 0; i < 40000; ++i) {
+        const isin::Vertex<T> c{T(3 * (i % 200)), T(3 * (i / 200)), T(0)};
+        isin::Box<T> b;
+        b.grow(c), b.grow(c + isin::Vertex<T>{1, 1, 1});
+        cubes.push_back(b);
+    }
+    isin::BvhOptions parallel = one;
+    parallel.threads = 2;
+    CHECK(isin::build_bvh<T>(
+              cubes.size(), [&](std::size_t i) { return cubes[i]; }, parallel)
+              .leaf_scale() == T(1));
+}
+
 TEST_CASE_TEMPLATE("BVH refit: after the vertices move, hits equal a rebuild's", T, float, double) {
     isin::Mesh<T> mesh = isin::Mesh<T>::from_triangles(workloads::triangle_soup<T>(5000, 8));
     isin::Bvh<T> bvh{mesh};

@@ -164,21 +164,23 @@ public:
         reserve_huge_pages(tree_.leaves_, prims.size() / 2 + 1);
         plan(*root);
         Wide tree{tree_.nodes_, tree_.leaves_};
-        if (root->becomes_leaf()) { // a single leaf: a root node with one child
-            tree.nodes.emplace_back();
-            clear(tree.nodes[0]);
-            set_child(tree, 0, 0, *root, add_leaf(tree, *root));
-        } else if (threads_ <= 1 || root->count < parallel_min) {
-            collapse(tree, *root);
+        if (root->becomes_leaf() || threads_ <= 1 || root->count < parallel_min) {
+            if (root->becomes_leaf()) { // a single leaf: a root node with one child
+                tree.nodes.emplace_back();
+                clear(tree.nodes[0]);
+                set_child(tree, 0, 0, *root, add_leaf(tree, *root));
+            } else {
+                collapse(tree, *root);
+            }
+            size_order(prims.size()); // after the collapse: see collapse_subtrees
+            fill_order(prims, 0, static_cast<std::uint32_t>(prims.size()));
         } else {
             std::vector<Subtree> subtrees;
             collapse(tree, *root, &subtrees);
             size_order(prims.size());
             collapse_subtrees(prims, subtrees); // fills the primitive order too
-            return std::move(tree_);
         }
-        size_order(prims.size()); // after the collapse: see collapse_subtrees
-        fill_order(prims, 0, static_cast<std::uint32_t>(prims.size()));
+        tree_.measure_leaf_scale();
         return std::move(tree_);
     }
 
