@@ -303,7 +303,7 @@ TEST_CASE("Bvh stream: camera tiles form full packets where packets are compiled
     for (std::size_t i = 0; i < tiles.size(); i += 16) {
         load(tiles.data() + i, c);
         isin::detail::RayPacket p;
-        full += isin::detail::make_packet(p, c, 16, t_max, 100.0f) == 0xffffu;
+        full += isin::detail::make_packet(p, c, 16, t_max, 100.0f, 1.0f) == 0xffffu;
     }
     CHECK(full == int(tiles.size() / 16));
     std::mt19937_64 rng(4);
@@ -314,12 +314,67 @@ TEST_CASE("Bvh stream: camera tiles form full packets where packets are compiled
         for (auto& r : random) r = {{uni(rng), uni(rng), uni(rng)}, {uni(rng), uni(rng), uni(rng)}};
         load(random.data(), c);
         isin::detail::RayPacket p;
-        formed += isin::detail::make_packet(p, c, 16, t_max, 100.0f) != 0;
+        formed += isin::detail::make_packet(p, c, 16, t_max, 100.0f, 1.0f) != 0;
     }
     CHECK(formed == 0);
 #else
     CHECK(path == "single rays");
 #endif
+}
+
+TEST_CASE("Bvh stream: rays whose origins lie many leaf sizes apart form no packet, with the same results") {
+    // Parallel rays towards +z from a row of points 4 apart (60.5 in all), through a grid of
+    // small triangles: the even rays hit one, the odd ones pass beside it.
+    std::vector<isin::Triangle<float>> tris;
+    for (int i = 0; i < 70; ++i)
+        for (int j = 0; j < 4; ++j) {
+            const float x = float(i - 24), y = float(j - 2);
+            tris.push_back({{x, y, 10.0f}, {x, y + 0.5f, 10.0f}, {x + 0.5f, y, 10.0f}});
+        }
+    const isin::Bvh<float> bvh(tris);
+    const float leaf_scale = bvh.tree().leaf_scale();
+    REQUIRE(leaf_scale > 0.0f);
+    std::vector<isin::Ray<float>> rays;
+    for (int k = 0; k < 16; ++k)
+        rays.push_back({{4.0f * float(k) - 22.0f + (k % 2 ? 0.5f : 0.0f), 0.0f, 0.0f}, {0.01f, 0.02f, 1.0f}});
+#if defined(ISIN_DETAIL_PACKETS)
+    alignas(32) float c[6][16];
+    float t_max[16];
+    for (int k = 0; k < 16; ++k) {
+        t_max[k] = 20.0f;
+        for (int a = 0; a < 3; ++a)
+            c[a][k] = isin::component(rays[std::size_t(k)].origin, a),
+            c[3 + a][k] = isin::component(rays[std::size_t(k)].direction, a);
+    }
+    isin::detail::RayPacket p;
+    // 60.5 apart along x: a packet for leaves of 60.5 / 8 and more, none below
+    const float spread = 60.5f / isin::detail::packet_origin_spread;
+    CHECK(isin::detail::make_packet(p, c, 16, t_max, 100.0f, spread) == 0xffffu);
+    CHECK_FALSE(p.wide);
+    CHECK(isin::detail::make_packet(p, c, 16, t_max, 100.0f, spread * 0.99f) == 0u);
+    CHECK(p.wide);
+    REQUIRE(leaf_scale < spread); // this grid's leaves: the stream below traces the rays alone
+    CHECK(isin::detail::make_packet(p, c, 16, t_max, 100.0f, leaf_scale) == 0u);
+    CHECK(p.wide);
+    // Rays of other directions are not wide: they are not coherent at all.
+    for (int k = 0; k < 16; ++k)
+        c[3][k] = std::cos(0.7f * float(k)), c[4][k] = std::sin(0.7f * float(k)), c[5][k] = 0.2f;
+    CHECK(isin::detail::make_packet(p, c, 16, t_max, 100.0f, spread) == 0u);
+    CHECK_FALSE(p.wide);
+#endif
+    std::vector<float> t_far(rays.size(), 20.0f);
+    std::vector<std::uint8_t> blocked(rays.size());
+    std::vector<isin::Hit<float>> hits(rays.size());
+    bvh.occluded(rays.data(), rays.size(), t_far.data(), blocked.data());
+    bvh.intersect(rays.data(), rays.size(), hits.data());
+    int wrong = 0, hit = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const auto one = bvh.intersect(rays[i]);
+        hit += bool(one);
+        wrong += !same_hit(one, hits[i]) + (blocked[i] != (bvh.occluded(rays[i], 20.0f) ? 1 : 0));
+    }
+    CHECK(hit == 8);
+    CHECK(wrong == 0);
 }
 
 TEST_CASE("Bvh packets: two rays' block test in one register gives each ray's own test bit for bit") {
