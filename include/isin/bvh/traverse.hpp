@@ -57,6 +57,14 @@ struct SlabRay {
     bool robust;
 };
 
+// 1 + 2γ₃, γ₃ = 3u/(1 − 3u): SlabRay::inv_far = inv·slab_widen (Ize 2013, pbrt).
+template <class T>
+inline constexpr T slab_widen = T(1) + T(2) * (T(3) * (std::numeric_limits<T>::epsilon() / 2) /
+                                               (T(1) - T(3) * (std::numeric_limits<T>::epsilon() / 2)));
+// SlabRay's allowance on o·inv, relative: 4ε.
+template <class T>
+inline constexpr T slab_allowance = T(4) * std::numeric_limits<T>::epsilon();
+
 // Per-ray set-up, with as few branches as it can: most rays of a frame cost a few node
 // visits, so this is a fair part of their time.
 template <class T>
@@ -69,19 +77,17 @@ ISIN_DETAIL_INLINE SlabRay<T> prepare_slab(const Ray<T>& ray, T bound) noexcept 
     // x − x is 0 for a finite x and NaN otherwise
     const T finite = ((o.x - o.x) + (o.y - o.y)) + ((o.z - o.z) + (d.x - d.x)) + ((d.y - d.y) + (d.z - d.z));
     r.ok = (finite == T(0)) & (std::max(ax, std::max(ay, az)) > T(0));
-    constexpr T u = std::numeric_limits<T>::epsilon() / 2, widen = T(1) + T(2) * (T(3) * u / (T(1) - T(3) * u));
     constexpr T no_overflow = std::numeric_limits<T>::max() / T(8);
     bool fast = true;
     for (int a = 0; a < 3; ++a) {
         const T da = component(d, a);
         r.org[a] = component(o, a);
         r.inv[a] = T(1) / da;
-        r.inv_far[a] = r.inv[a] * widen;
+        r.inv_far[a] = r.inv[a] * slab_widen<T>;
         fast &= std::max(bound, std::fabs(r.org[a])) * std::fabs(r.inv_far[a]) < no_overflow; // false for ∞
         const T org_inv = r.org[a] * r.inv[a], org_inv_far = r.org[a] * r.inv_far[a];
-        constexpr T allowance = T(4) * std::numeric_limits<T>::epsilon();
-        r.org_inv_near[a] = org_inv + allowance * std::fabs(org_inv);
-        r.org_inv_far[a] = org_inv_far - allowance * std::fabs(org_inv_far);
+        r.org_inv_near[a] = org_inv + slab_allowance<T> * std::fabs(org_inv);
+        r.org_inv_far[a] = org_inv_far - slab_allowance<T> * std::fabs(org_inv_far);
         const bool near_is_lo = !std::signbit(da);
         const std::size_t lo = std::size_t(a) * sizeof(Node::lo[0]), hi = sizeof(Node::lo) + lo;
         r.near_plane[a] = near_is_lo ? lo : hi;
@@ -279,6 +285,27 @@ bool walk_ray(const BvhTree<T>& tree, const SlabRay<T>& r, T& t_max, Leaf& leaf)
     return r.robust ? walk<visit, true>(tree, r, t_max, leaf) : walk<visit, false>(tree, r, t_max, leaf);
 }
 
+// traverse_pair from the rays' slab terms (a non-empty tree): bit 0 when leaf_a stopped ray a,
+// bit 1 when leaf_b stopped ray b.
+template <Visit visit, class T, class LeafA, class LeafB>
+unsigned walk_pair(const BvhTree<T>& tree, const SlabRay<T>& a, T& t_a, LeafA& leaf_a, const SlabRay<T>& b, T& t_b,
+                   LeafB& leaf_b) {
+    const bool go_a = a.ok && t_a > T(0), go_b = b.ok && t_b > T(0);
+    if (go_a && go_b && !a.robust && !b.robust) {
+        using Slab = const SlabRay<T>&;
+        Walker<visit, false, T, LeafA, Slab> wa(tree, a, t_a, leaf_a, 0);
+        Walker<visit, false, T, LeafB, Slab> wb(tree, b, t_b, leaf_b, 0);
+        bool on_a = true, on_b = true;
+        while (on_a && on_b) on_a = wa.step(), on_b = wb.step();
+        while (on_a) on_a = wa.step();
+        while (on_b) on_b = wb.step();
+        return (wa.stopped ? 1u : 0u) | (wb.stopped ? 2u : 0u);
+    }
+    const bool stopped_a = go_a && walk_ray<visit>(tree, a, t_a, leaf_a);
+    const bool stopped_b = go_b && walk_ray<visit>(tree, b, t_b, leaf_b);
+    return (stopped_a ? 1u : 0u) | (stopped_b ? 2u : 0u);
+}
+
 } // namespace detail
 
 /// Visits the leaves of `tree` whose boxes the ray enters with t in (0, t_max), calling
@@ -306,22 +333,8 @@ template <Visit visit, class T, class LeafA, class LeafB>
 unsigned traverse_pair(const BvhTree<T>& tree, const Ray<T>& ray_a, T& t_a, LeafA&& leaf_a, const Ray<T>& ray_b, T& t_b,
                        LeafB&& leaf_b) {
     if (tree.empty()) return 0;
-    const detail::SlabRay<T> a = detail::prepare_slab(ray_a, tree.bound());
-    const detail::SlabRay<T> b = detail::prepare_slab(ray_b, tree.bound());
-    const bool go_a = a.ok && t_a > T(0), go_b = b.ok && t_b > T(0);
-    if (go_a && go_b && !a.robust && !b.robust) {
-        using Slab = const detail::SlabRay<T>&;
-        detail::Walker<visit, false, T, std::remove_reference_t<LeafA>, Slab> wa(tree, a, t_a, leaf_a, 0);
-        detail::Walker<visit, false, T, std::remove_reference_t<LeafB>, Slab> wb(tree, b, t_b, leaf_b, 0);
-        bool on_a = true, on_b = true;
-        while (on_a && on_b) on_a = wa.step(), on_b = wb.step();
-        while (on_a) on_a = wa.step();
-        while (on_b) on_b = wb.step();
-        return (wa.stopped ? 1u : 0u) | (wb.stopped ? 2u : 0u);
-    }
-    const bool stopped_a = go_a && detail::walk_ray<visit>(tree, a, t_a, leaf_a);
-    const bool stopped_b = go_b && detail::walk_ray<visit>(tree, b, t_b, leaf_b);
-    return (stopped_a ? 1u : 0u) | (stopped_b ? 2u : 0u);
+    return detail::walk_pair<visit>(tree, detail::prepare_slab(ray_a, tree.bound()), t_a, leaf_a,
+                                    detail::prepare_slab(ray_b, tree.bound()), t_b, leaf_b);
 }
 
 } // namespace isin
