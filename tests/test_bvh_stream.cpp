@@ -154,6 +154,83 @@ TEST_CASE_TEMPLATE("Bvh stream: random rays, shadow rays from hit points and cou
     }
 }
 
+TEST_CASE("Bvh stream: SlabLanes gives prepare_slab's terms, 16 rays at once") {
+#if defined(ISIN_DETAIL_PACKETS)
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    const float tiny = std::numeric_limits<float>::min();
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<float> uni(-1, 1);
+    int checked = 0, robust = 0, not_ok = 0, wrong = 0;
+    for (int round = 0; round < 50; ++round) {
+        std::vector<isin::Ray<float>> rays(16);
+        for (auto& r : rays) r = {{20 * uni(rng), 20 * uni(rng), 20 * uni(rng)}, {uni(rng), uni(rng), uni(rng)}};
+        // some rays of every kind: zero, NaN, infinite, −0.0 and tiny components, a zero direction
+        rays[1].direction.x = 0.0f, rays[2].direction.y = -0.0f, rays[3].direction.z = tiny;
+        rays[4].direction.x = -tiny, rays[5].origin.y = nan, rays[6].direction.z = inf;
+        rays[7].direction = {0.0f, -0.0f, 0.0f}, rays[8].origin.x = 1e30f;
+        alignas(64) float c[6][16];
+        isin::detail::load_packet_rays(rays.data(), 0, 16, c);
+        const float bound = 30.0f;
+        const isin::detail::SlabLanes lanes(c, bound);
+        for (int k = 0; k < 16; ++k) {
+            const auto want = isin::detail::prepare_slab(rays[std::size_t(k)], bound);
+            const auto got = lanes.at(k);
+            ++checked, robust += want.robust, not_ok += !want.ok;
+            bool same = got.ok == want.ok;
+            if (want.ok) {
+                same = same && got.robust == want.robust;
+                for (int a = 0; a < 3; ++a) {
+                    same = same && same_bits(got.org[a], want.org[a]) && same_bits(got.inv[a], want.inv[a]) &&
+                           same_bits(got.inv_far[a], want.inv_far[a]) && got.near_plane[a] == want.near_plane[a] &&
+                           got.far_plane[a] == want.far_plane[a];
+                    if (!want.robust) // the allowance added in one rounding or two: within an ulp
+                        same = same &&
+                               std::fabs(got.org_inv_near[a] - want.org_inv_near[a]) <=
+                                   std::fabs(want.org_inv_near[a]) * 1.2e-7f &&
+                               std::fabs(got.org_inv_far[a] - want.org_inv_far[a]) <=
+                                   std::fabs(want.org_inv_far[a]) * 1.2e-7f;
+                }
+            }
+            wrong += !same;
+        }
+    }
+    CHECK(robust >= 150);
+    CHECK(not_ok >= 150);
+    CHECK(wrong == 0);
+    CHECK(checked == 800);
+#endif
+}
+
+TEST_CASE_TEMPLATE("Bvh stream: rays that need the robust slab test (tiny direction components) among random rays", T,
+                   float, double) {
+    // A component of the least normal value: 1/d is 2^(max exponent − 1), so its products with
+    // the scene's coordinates overflow and the ray takes the robust slab form, two at a time or
+    // alone.
+    const auto tris = workloads::triangle_soup<T>(3000, 6, 1.5);
+    const isin::Bvh<T> bvh{tris};
+    const T tiny = std::numeric_limits<T>::min();
+    std::mt19937_64 rng(21);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    std::vector<isin::Ray<T>> rays;
+    std::vector<T> limit;
+    int robust = 0, hits = 0;
+    for (int i = 0; i < 1600; ++i) {
+        const isin::Vertex<T> o{T(uni(rng) * 12), T(uni(rng) * 12), T(uni(rng) * 12)};
+        isin::Vertex<T> d{T(uni(rng)), T(uni(rng)), T(uni(rng))};
+        if (i % 3 != 0) { // two of three rays: one component tiny (of either sign)
+            const T sign = uni(rng) < 0 ? T(-1) : T(1);
+            (i % 3 == 1 ? d.x : d.z) = sign * tiny;
+        }
+        rays.push_back({o, d});
+        limit.push_back(T(30));
+        robust += isin::detail::prepare_slab(rays.back(), bvh.tree().bound()).robust;
+        hits += bool(bvh.intersect(rays.back()));
+    }
+    CHECK(robust > 1000);
+    CHECK(hits > 300);
+    CHECK(stream_mismatches(bvh, rays, limit) == 0);
+}
+
 TEST_CASE_TEMPLATE("Bvh stream: NaN, infinite, zero, axis-parallel and −0.0 rays inside packets", T, float, double) {
     const auto tris = workloads::triangle_soup<T>(2000, 8, 1.5);
     const isin::Bvh<T> bvh{tris};

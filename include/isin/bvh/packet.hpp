@@ -135,6 +135,92 @@ inline float lanes_max(__m256 a, __m256 b) noexcept {
     return _mm_cvtss_f32(_mm_max_ss(h, _mm_shuffle_ps(h, h, 1)));
 }
 
+/// The lanes of `c` (16 rays, as load_packet_rays fills it) whose origin and direction are
+/// finite and whose direction is not zero (prepare_slab's `ok`), and the sign bits of the
+/// directions' components (octant[axis], bit k for ray k).
+inline unsigned rays_usable(const float (&c)[6][RayPacket::size], unsigned (&octant)[3]) noexcept {
+    const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)), zero = _mm256_setzero_ps();
+    unsigned usable = 0;
+    octant[0] = octant[1] = octant[2] = 0;
+    for (int g = 0; g < RayPacket::size; g += 8) {
+        __m256 ok = _mm256_castsi256_ps(_mm256_set1_epi32(-1)), d_max = zero;
+        for (int a = 0; a < 3; ++a) {
+            const __m256 o = _mm256_load_ps(c[a] + g), d = _mm256_load_ps(c[3 + a] + g);
+            const __m256 finite =
+                _mm256_cmp_ps(_mm256_add_ps(_mm256_sub_ps(o, o), _mm256_sub_ps(d, d)), zero, _CMP_EQ_OQ);
+            ok = _mm256_and_ps(ok, finite);
+            d_max = _mm256_max_ps(d_max, _mm256_and_ps(d, magnitude));
+            octant[a] |= unsigned(_mm256_movemask_ps(d)) << g;
+        }
+        ok = _mm256_and_ps(ok, _mm256_cmp_ps(d_max, zero, _CMP_GT_OQ));
+        usable |= unsigned(_mm256_movemask_ps(ok)) << g;
+    }
+    return usable;
+}
+
+/// prepare_slab's fast-form terms of the 16 rays of `c`, eight lanes at a time, by its rules
+/// (so as conservative; o·inv's allowance is added in one FMA): origin, inv, inv_far and the
+/// raised and lowered o·inv. Returns the lanes whose products cannot overflow (prepare_slab's
+/// `robust` is false for them).
+inline unsigned slab_lanes(const float (&c)[6][RayPacket::size], float bound, float (&org)[3][RayPacket::size],
+                           float (&inv)[3][RayPacket::size], float (&inv_far)[3][RayPacket::size],
+                           float (&org_inv_near)[3][RayPacket::size],
+                           float (&org_inv_far)[3][RayPacket::size]) noexcept {
+    constexpr float widen = slab_widen<float>, allowance = slab_allowance<float>;
+    const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    const __m256 no_overflow = _mm256_set1_ps(std::numeric_limits<float>::max() / 8.0f);
+    unsigned fast = 0;
+    for (int g = 0; g < RayPacket::size; g += 8) {
+        __m256 ok = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        for (int a = 0; a < 3; ++a) {
+            const __m256 o = _mm256_load_ps(c[a] + g), d = _mm256_load_ps(c[3 + a] + g);
+            const __m256 i = _mm256_div_ps(_mm256_set1_ps(1.0f), d), i_far = _mm256_mul_ps(i, _mm256_set1_ps(widen));
+            // max(bound, |o|)·|inv_far| below max/8 (false for an infinite inv)
+            ok = _mm256_and_ps(
+                ok, _mm256_cmp_ps(_mm256_mul_ps(_mm256_max_ps(_mm256_and_ps(o, magnitude), _mm256_set1_ps(bound)),
+                                                _mm256_and_ps(i_far, magnitude)),
+                                  no_overflow, _CMP_LT_OQ));
+            const __m256 o_i = _mm256_mul_ps(o, i), o_i_far = _mm256_mul_ps(o, i_far);
+            _mm256_store_ps(org[a] + g, o);
+            _mm256_store_ps(inv[a] + g, i);
+            _mm256_store_ps(inv_far[a] + g, i_far);
+            _mm256_store_ps(org_inv_near[a] + g,
+                            _mm256_fmadd_ps(_mm256_set1_ps(allowance), _mm256_and_ps(o_i, magnitude), o_i));
+            _mm256_store_ps(org_inv_far[a] + g,
+                            _mm256_fnmadd_ps(_mm256_set1_ps(allowance), _mm256_and_ps(o_i_far, magnitude), o_i_far));
+        }
+        fast |= unsigned(_mm256_movemask_ps(ok)) << g;
+    }
+    return fast;
+}
+
+/// The SlabRay of each of 16 rays, made at once (rays_usable, slab_lanes): for the rays of a
+/// stream that no packet takes, traced one by one or two at a time.
+struct alignas(64) SlabLanes {
+    float org[3][RayPacket::size], inv[3][RayPacket::size], inv_far[3][RayPacket::size],
+        org_inv_near[3][RayPacket::size], org_inv_far[3][RayPacket::size];
+    unsigned negative[3]; // the directions' sign bits
+    unsigned usable, fast;
+    SlabLanes(const float (&c)[6][RayPacket::size], float bound) noexcept
+        : usable(rays_usable(c, negative)), fast(slab_lanes(c, bound, org, inv, inv_far, org_inv_near, org_inv_far)) {}
+    /// Ray k's terms, as prepare_slab gives them (but for o·inv's one rounding fewer).
+    SlabRay<float> at(int k) const noexcept {
+        using Node = BvhTree<float>::Node;
+        SlabRay<float> r;
+        for (int a = 0; a < 3; ++a) {
+            r.org[a] = org[a][k], r.inv[a] = inv[a][k], r.inv_far[a] = inv_far[a][k];
+            r.org_inv_near[a] = org_inv_near[a][k], r.org_inv_far[a] = org_inv_far[a][k];
+            const std::size_t lo = std::size_t(a) * sizeof(Node::lo[0]), hi = sizeof(Node::lo) + lo;
+            const bool near_is_lo = !((negative[a] >> k) & 1u);
+            r.near_plane[a] = near_is_lo ? lo : hi;
+            r.far_plane[a] = near_is_lo ? hi : lo;
+        }
+        r.ok = (usable >> k) & 1u;
+        r.robust = !((fast >> k) & 1u);
+        return r;
+    }
+};
+
 /// Sets up `p` from the rays in `c` (origin x, y, z, direction x, y, z; lane k = ray k < n ≤ 16)
 /// and their bounds t_max[0, n) (all 16 are read; lanes from n on are left out). First the
 /// packet: the rays with a finite, non-zero direction and t_max > 0 that share the first such
@@ -152,23 +238,15 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
             _mm256_cmpgt_epi32(_mm256_set1_epi32(n - g), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
         _mm256_store_ps(p.t_far + g, _mm256_blendv_ps(_mm256_set1_ps(-1.0f), _mm256_loadu_ps(t_max + g), within));
     }
-    const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)), zero = _mm256_setzero_ps();
     // The rays that may join, and their octants (sign bits): cheap tests first, so that an
     // incoherent stream costs little here.
-    unsigned usable = 0, octant[3] = {0, 0, 0};
-    for (int g = 0; g < RayPacket::size; g += 8) {
-        __m256 ok = _mm256_cmp_ps(_mm256_load_ps(p.t_far + g), zero, _CMP_GT_OQ), d_max = zero;
-        for (int a = 0; a < 3; ++a) {
-            const __m256 o = _mm256_load_ps(c[a] + g), d = _mm256_load_ps(c[3 + a] + g);
-            const __m256 finite =
-                _mm256_cmp_ps(_mm256_add_ps(_mm256_sub_ps(o, o), _mm256_sub_ps(d, d)), zero, _CMP_EQ_OQ);
-            ok = _mm256_and_ps(ok, finite);
-            d_max = _mm256_max_ps(d_max, _mm256_and_ps(d, magnitude));
-            octant[a] |= unsigned(_mm256_movemask_ps(d)) << g;
-        }
-        ok = _mm256_and_ps(ok, _mm256_cmp_ps(d_max, zero, _CMP_GT_OQ));
-        usable |= unsigned(_mm256_movemask_ps(ok)) << g;
-    }
+    unsigned octant[3];
+    unsigned reach = 0; // t_far > 0
+    for (int g = 0; g < RayPacket::size; g += 8)
+        reach |=
+            unsigned(_mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(p.t_far + g), _mm256_setzero_ps(), _CMP_GT_OQ)))
+            << g;
+    const unsigned usable = rays_usable(c, octant) & reach;
     if (!(usable & (usable - 1))) return 0; // fewer than two
     const int first = lowest_bit(usable);
     unsigned lanes = usable;
@@ -190,33 +268,8 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
     if (bit_count(lanes) < packet_min_rays) return 0;
     // The slab constants, as prepare_slab's fast form; a lane whose products could overflow
     // leaves the packet.
-    constexpr float u = std::numeric_limits<float>::epsilon() / 2;
-    constexpr float widen = 1.0f + 2.0f * (3.0f * u / (1.0f - 3.0f * u)); // as prepare_slab
-    constexpr float allowance = 4.0f * std::numeric_limits<float>::epsilon();
-    const __m256 no_overflow = _mm256_set1_ps(std::numeric_limits<float>::max() / 8.0f);
-    unsigned fast = 0;
-    for (int g = 0; g < RayPacket::size; g += 8) {
-        __m256 ok = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
-        for (int a = 0; a < 3; ++a) {
-            const __m256 o = _mm256_load_ps(c[a] + g), d = _mm256_load_ps(c[3 + a] + g);
-            const __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), d),
-                         inv_far = _mm256_mul_ps(inv, _mm256_set1_ps(widen));
-            // max(bound, |o|)·|inv_far| below max/8 (false for an infinite inv)
-            ok = _mm256_and_ps(
-                ok, _mm256_cmp_ps(_mm256_mul_ps(_mm256_max_ps(_mm256_and_ps(o, magnitude), _mm256_set1_ps(bound)),
-                                                _mm256_and_ps(inv_far, magnitude)),
-                                  no_overflow, _CMP_LT_OQ));
-            const __m256 org_inv = _mm256_mul_ps(o, inv), org_inv_far = _mm256_mul_ps(o, inv_far);
-            _mm256_store_ps(p.org[a] + g, o);
-            _mm256_store_ps(p.inv[a] + g, inv);
-            _mm256_store_ps(p.inv_far[a] + g, inv_far);
-            _mm256_store_ps(p.org_inv_near[a] + g,
-                            _mm256_fmadd_ps(_mm256_set1_ps(allowance), _mm256_and_ps(org_inv, magnitude), org_inv));
-            _mm256_store_ps(p.org_inv_far[a] + g, _mm256_fnmadd_ps(_mm256_set1_ps(allowance),
-                                                                   _mm256_and_ps(org_inv_far, magnitude), org_inv_far));
-        }
-        fast |= unsigned(_mm256_movemask_ps(ok)) << g;
-    }
+    const unsigned fast = slab_lanes(c, bound, p.org, p.inv, p.inv_far, p.org_inv_near, p.org_inv_far);
+    constexpr float widen = slab_widen<float>;
     lanes &= fast;
     if (bit_count(lanes) < packet_min_rays) return 0;
     // Lanes outside the packet: never entered (t_far < 0), and out of the intervals.
@@ -285,31 +338,37 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
 /// `t_far`; `t_near` gets a lower bound of the rays' entry distances. The margin (make_packet) is
 /// an absolute allowance along each axis of 32ε·(bound + |o|), far more than the rays' own slab
 /// tests and the interval products round.
+// One axis of packet_hit_boxes: the entry and exit bounds of the boxes' slabs (planes near and
+// far) raise tn and lower tf. A function, always inlined with packet_hit_boxes and
+// packet_hit_children: written as a lambda, g++ left it out of line once the stream code around
+// walk_packet grew, and the terrain's camera rays ran 10-19% slower.
+ISIN_DETAIL_INLINE void packet_slab(const RayPacket& p, int a, __m256 near, __m256 far, __m256& tn,
+                                    __m256& tf) noexcept {
+    const __m256 margin = _mm256_set1_ps(p.margin[a]);
+    const __m256 dn = _mm256_sub_ps(near, _mm256_set1_ps(p.entry_org[a]));
+    const __m256 df = _mm256_sub_ps(far, _mm256_set1_ps(p.exit_org[a]));
+    const __m256 entry =
+        _mm256_min_ps(_mm256_mul_ps(dn, _mm256_set1_ps(p.inv_lo[a])), _mm256_mul_ps(dn, _mm256_set1_ps(p.inv_hi[a])));
+    const __m256 exit =
+        _mm256_max_ps(_mm256_mul_ps(df, _mm256_set1_ps(p.far_lo[a])), _mm256_mul_ps(df, _mm256_set1_ps(p.far_hi[a])));
+    tn = _mm256_max_ps(tn, _mm256_sub_ps(entry, margin));
+    tf = _mm256_min_ps(tf, _mm256_add_ps(exit, margin));
+}
 template <class Planes>
-inline unsigned packet_hit_boxes(const Planes& planes, const RayPacket& p, float t_far, __m256& t_near) noexcept {
-    __m256 tn = _mm256_setzero_ps(), tf = _mm256_set1_ps(t_far);
+ISIN_DETAIL_INLINE unsigned packet_hit_boxes(const Planes& planes, const RayPacket& p, float t_far,
+                                             __m256& t_near) noexcept {
+    __m256 tn = _mm256_setzero_ps(), tf = _mm256_set1_ps(t_far), near, far;
     // Axis by axis, written out: as a loop over arrays of planes, g++ -O2 kept them on the stack.
-    const auto slab = [&](int a) {
-        __m256 near, far;
-        planes(a, near, far);
-        const __m256 margin = _mm256_set1_ps(p.margin[a]);
-        const __m256 dn = _mm256_sub_ps(near, _mm256_set1_ps(p.entry_org[a]));
-        const __m256 df = _mm256_sub_ps(far, _mm256_set1_ps(p.exit_org[a]));
-        const __m256 entry = _mm256_min_ps(_mm256_mul_ps(dn, _mm256_set1_ps(p.inv_lo[a])),
-                                           _mm256_mul_ps(dn, _mm256_set1_ps(p.inv_hi[a])));
-        const __m256 exit = _mm256_max_ps(_mm256_mul_ps(df, _mm256_set1_ps(p.far_lo[a])),
-                                          _mm256_mul_ps(df, _mm256_set1_ps(p.far_hi[a])));
-        tn = _mm256_max_ps(tn, _mm256_sub_ps(entry, margin));
-        tf = _mm256_min_ps(tf, _mm256_add_ps(exit, margin));
-    };
-    slab(0), slab(1), slab(2);
+    planes(0, near, far), packet_slab(p, 0, near, far, tn, tf);
+    planes(1, near, far), packet_slab(p, 1, near, far, tn, tf);
+    planes(2, near, far), packet_slab(p, 2, near, far, tn, tf);
     t_near = tn;
     return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ)));
 }
 
 /// packet_hit_boxes on a node's 8 children: every child a ray of the packet enters is set.
-inline unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPacket& p, float t_far,
-                                    float (&t_near)[8]) noexcept {
+ISIN_DETAIL_INLINE unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPacket& p, float t_far,
+                                                float (&t_near)[8]) noexcept {
     __m256 tn;
     const unsigned mask = packet_hit_boxes(
         [&](int a, __m256& near, __m256& far) {
