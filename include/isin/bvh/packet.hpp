@@ -205,15 +205,11 @@ struct alignas(64) SlabLanes {
         : usable(rays_usable(c, negative)), fast(slab_lanes(c, bound, org, inv, inv_far, org_inv_near, org_inv_far)) {}
     /// Ray k's terms, as prepare_slab gives them (but for o·inv's one rounding fewer).
     SlabRay<float> at(int k) const noexcept {
-        using Node = BvhTree<float>::Node;
         SlabRay<float> r;
         for (int a = 0; a < 3; ++a) {
             r.org[a] = org[a][k], r.inv[a] = inv[a][k], r.inv_far[a] = inv_far[a][k];
             r.org_inv_near[a] = org_inv_near[a][k], r.org_inv_far[a] = org_inv_far[a][k];
-            const std::size_t lo = std::size_t(a) * sizeof(Node::lo[0]), hi = sizeof(Node::lo) + lo;
-            const bool near_is_lo = !((negative[a] >> k) & 1u);
-            r.near_plane[a] = near_is_lo ? lo : hi;
-            r.far_plane[a] = near_is_lo ? hi : lo;
+            slab_planes<float>(a, (negative[a] >> k) & 1u, r.near_plane[a], r.far_plane[a]);
         }
         r.ok = (usable >> k) & 1u;
         r.robust = !((fast >> k) & 1u);
@@ -302,13 +298,10 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
         }
     }
     p.lanes = lanes;
-    using Node = BvhTree<float>::Node;
     p.one_origin = true;
     for (int a = 0; a < 3; ++a) {
         const bool positive = !((octant[a] >> first) & 1u);
-        const std::size_t lo_plane = std::size_t(a) * sizeof(Node::lo[0]), hi_plane = sizeof(Node::lo) + lo_plane;
-        p.near_plane[a] = positive ? lo_plane : hi_plane;
-        p.far_plane[a] = positive ? hi_plane : lo_plane;
+        slab_planes<float>(a, !positive, p.near_plane[a], p.far_plane[a]);
         // Entry (p − o)·inv is least at the largest p − o along the direction's sign: the
         // farthest-forward origin; the exit is greatest at the farthest-back one.
         p.one_origin = p.one_origin && o_lo[a] == o_hi[a];
@@ -331,13 +324,6 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
     return lanes;
 }
 
-/// The interval slab test of 8 boxes for the whole packet, each box given per axis by its plane
-/// the packet's rays enter through (near: lo where the packet's direction is positive, hi
-/// elsewhere) and the one they leave through (far), as `planes(a, near, far)` sets them: bit k
-/// set when some ray of the packet may enter box k, or pass within the margin of it, before
-/// `t_far`; `t_near` gets a lower bound of the rays' entry distances. The margin (make_packet) is
-/// an absolute allowance along each axis of 32ε·(bound + |o|), far more than the rays' own slab
-/// tests and the interval products round.
 // One axis of packet_hit_boxes: the entry and exit bounds of the boxes' slabs (planes near and
 // far) raise tn and lower tf. A function, always inlined with packet_hit_boxes and
 // packet_hit_children: written as a lambda, g++ left it out of line once the stream code around
@@ -354,6 +340,14 @@ ISIN_DETAIL_INLINE void packet_slab(const RayPacket& p, int a, __m256 near, __m2
     tn = _mm256_max_ps(tn, _mm256_sub_ps(entry, margin));
     tf = _mm256_min_ps(tf, _mm256_add_ps(exit, margin));
 }
+
+/// The interval slab test of 8 boxes for the whole packet, each box given per axis by its plane
+/// the packet's rays enter through (near: lo where the packet's direction is positive, hi
+/// elsewhere) and the one they leave through (far), as `planes(a, near, far)` sets them: bit k
+/// set when some ray of the packet may enter box k, or pass within the margin of it, before
+/// `t_far`; `t_near` gets a lower bound of the rays' entry distances. The margin (make_packet) is
+/// an absolute allowance along each axis of 32ε·(bound + |o|), far more than the rays' own slab
+/// tests and the interval products round.
 template <class Planes>
 ISIN_DETAIL_INLINE unsigned packet_hit_boxes(const Planes& planes, const RayPacket& p, float t_far,
                                              __m256& t_near) noexcept {

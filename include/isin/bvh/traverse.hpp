@@ -65,11 +65,20 @@ inline constexpr T slab_widen = T(1) + T(2) * (T(3) * (std::numeric_limits<T>::e
 template <class T>
 inline constexpr T slab_allowance = T(4) * std::numeric_limits<T>::epsilon();
 
+// SlabRay's byte offsets in a node of axis a's entry and exit planes: lo and hi for a direction
+// component whose sign bit is clear, hi and lo for one whose sign bit is set (−0.0 too).
+template <class T>
+ISIN_DETAIL_INLINE void slab_planes(int a, bool negative, std::size_t& near, std::size_t& far) noexcept {
+    using Node = typename BvhTree<T>::Node;
+    const std::size_t lo = std::size_t(a) * sizeof(Node::lo[0]), hi = sizeof(Node::lo) + lo;
+    near = negative ? hi : lo;
+    far = negative ? lo : hi;
+}
+
 // Per-ray set-up, with as few branches as it can: most rays of a frame cost a few node
 // visits, so this is a fair part of their time.
 template <class T>
 ISIN_DETAIL_INLINE SlabRay<T> prepare_slab(const Ray<T>& ray, T bound) noexcept {
-    using Node = typename BvhTree<T>::Node;
     SlabRay<T> r;
     const Vertex<T>& o = ray.origin;
     const Vertex<T>& d = ray.direction;
@@ -88,10 +97,7 @@ ISIN_DETAIL_INLINE SlabRay<T> prepare_slab(const Ray<T>& ray, T bound) noexcept 
         const T org_inv = r.org[a] * r.inv[a], org_inv_far = r.org[a] * r.inv_far[a];
         r.org_inv_near[a] = org_inv + slab_allowance<T> * std::fabs(org_inv);
         r.org_inv_far[a] = org_inv_far - slab_allowance<T> * std::fabs(org_inv_far);
-        const bool near_is_lo = !std::signbit(da);
-        const std::size_t lo = std::size_t(a) * sizeof(Node::lo[0]), hi = sizeof(Node::lo) + lo;
-        r.near_plane[a] = near_is_lo ? lo : hi;
-        r.far_plane[a] = near_is_lo ? hi : lo;
+        slab_planes<T>(a, std::signbit(da), r.near_plane[a], r.far_plane[a]);
     }
     r.robust = !fast;
     return r;

@@ -178,7 +178,7 @@ private:
                 if (n.child[k] == empty_child || !(n.child[k] & leaf_bit)) continue;
                 double extent = 0.0;
                 for (int a = 0; a < 3; ++a) extent = std::max(extent, double(n.hi[a][k]) - double(n.lo[a][k]));
-                if (extent > 0.0) log_sum += std::log2(extent), ++counted; // false for NaN (empty: −∞ − ∞)
+                if (extent > 0.0) log_sum += std::log2(extent), ++counted; // 0 for a point and an empty box (−∞ − ∞)
             }
         leaf_scale_ = counted ? T(std::exp2(log_sum / double(counted))) : T(0);
     }
