@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "../detail/attributes.hpp"
 #include "../hit.hpp"
 #include "../indexed_mesh.hpp"
 #include "../ray.hpp"
@@ -619,6 +620,27 @@ private:
         return lanes;
     }
 
+    // How far ahead of the chunk being traced stream() asks for its rays.
+    static constexpr std::size_t prefetch_ahead = 32;
+    // Asks the cache for the 16 rays from `first` on (and their t_max): the chunks read them one
+    // after the other, but each chunk's walk between the reads touches much other memory.
+    // Measured (stop 37, 2-core Zen 5, headers with and without alternated in one process,
+    // medians of 10-14): camera rays 1.004-1.016× as fast on the terrain, 1.3M icosphere and
+    // trefoil; shadow rays 1.004-1.021×, diffuse bounces 1.002-1.016× (terrain, trefoil, soup).
+    static void prefetch_chunk(const Ray<T>* rays, std::size_t first, std::size_t count, const T* t_max) noexcept {
+        const std::size_t end = std::min(count, first + 16);
+        const char* from = reinterpret_cast<const char*>(rays + first);
+        const char* const to = reinterpret_cast<const char*>(rays + end);
+        for (; from < to; from += 64) detail::prefetch(from);
+        if (t_max) detail::prefetch(t_max + first), detail::prefetch(t_max + end - 1);
+    }
+    static void prefetch_chunk(const RaysSoA<T>& rays, std::size_t first, std::size_t count, const T* t_max) noexcept {
+        const std::size_t last = std::min(count, first + 16) - 1;
+        const T* const arrays[6] = {rays.ox, rays.oy, rays.oz, rays.dx, rays.dy, rays.dz};
+        for (const T* a : arrays) detail::prefetch(a + first), detail::prefetch(a + last);
+        if (t_max) detail::prefetch(t_max + first), detail::prefetch(t_max + last);
+    }
+
     // Rays: const Ray<T>* or RaysSoA<T> (ray i is rays[i]).
     template <Visit visit, class Rays>
     void stream(const Rays& rays, std::size_t count, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
@@ -632,6 +654,7 @@ private:
         // the next ones wait).
         int wait = 0, backoff = 3;
         for (std::size_t first = 0; first < count; first += 16) {
+            if (first + prefetch_ahead < count) prefetch_chunk(rays, first + prefetch_ahead, count, t_max);
             const bool coherent = trace_chunk<visit>(rays, first, int(std::min<std::size_t>(16, count - first)), t_max,
                                                      hits, blocked, filter, wait == 0);
             if (coherent)

@@ -5,6 +5,7 @@
 ///  - ISIN_DETAIL_INLINE: a small function that must be inlined (measured: a call costs).
 ///  - ISIN_DETAIL_NOINLINE: a large function kept out of its caller, whose own loop it would
 ///    otherwise crowd (measured: the stream calls' single-ray loop).
+/// And detail::prefetch, a cache hint.
 #if defined(__GNUC__) || defined(__clang__)
 #define ISIN_DETAIL_COLD __attribute__((noinline, cold))
 #define ISIN_DETAIL_INLINE inline __attribute__((always_inline))
@@ -14,3 +15,16 @@
 #define ISIN_DETAIL_INLINE inline
 #define ISIN_DETAIL_NOINLINE
 #endif
+
+namespace isin {
+namespace detail {
+/// Asks the cache for the line holding `p` (a hint; nothing where the compiler has no builtin).
+inline void prefetch(const void* p) noexcept {
+#if defined(__GNUC__) || defined(__clang__)
+    __builtin_prefetch(p);
+#else
+    (void)p;
+#endif
+}
+} // namespace detail
+} // namespace isin
