@@ -32,10 +32,10 @@ struct alignas(64) RayPacket {
     float org[3][size], inv[3][size], org_inv_near[3][size], inv_far[3][size], org_inv_far[3][size];
     /// Per ray: hits count below this (the leaf lowers it); −1 for lanes not (or no longer) traced.
     float t_far[size];
-    // Per axis: the origin that gives the earliest entry (latest exit), the range of inv
-    // (inv_far), and an absolute allowance for the rounding of both the rays' own slab
-    // distances and the interval products.
-    float entry_org[3], exit_org[3], inv_lo[3], inv_hi[3], far_lo[3], far_hi[3], margin[3];
+    // Per axis, the interval test's terms (packet_slab): the range of inv (inv_far), and each
+    // end times the origin that gives the earliest entry (latest exit), less (plus) an absolute
+    // allowance for the rounding of both the rays' own slab distances and the interval's.
+    float inv_lo[3], inv_hi[3], far_lo[3], far_hi[3], entry_lo[3], entry_hi[3], exit_lo[3], exit_hi[3];
     std::size_t near_plane[3], far_plane[3]; // shared by every ray: one octant
     unsigned lanes = 0;                      // rays in the packet
     /// Every ray starts at the same point (a pinhole camera's rays): the interval test is then
@@ -139,6 +139,20 @@ inline float lanes_max(__m256 a, __m256 b) noexcept {
 /// finite and whose direction is not zero (prepare_slab's `ok`), and the sign bits of the
 /// directions' components (octant[axis], bit k for ray k).
 inline unsigned rays_usable(const float (&c)[6][RayPacket::size], unsigned (&octant)[3]) noexcept {
+#if defined(__AVX512F__)
+    { // the 16 rays in one register
+        const __m512 zero = _mm512_setzero_ps();
+        __mmask16 ok = 0xffff;
+        __m512 d_max = zero;
+        for (int a = 0; a < 3; ++a) {
+            const __m512 o = _mm512_loadu_ps(c[a]), d = _mm512_loadu_ps(c[3 + a]);
+            ok &= _mm512_cmp_ps_mask(_mm512_add_ps(_mm512_sub_ps(o, o), _mm512_sub_ps(d, d)), zero, _CMP_EQ_OQ);
+            d_max = max16(d_max, _mm512_abs_ps(d));
+            octant[a] = _mm512_cmplt_epi32_mask(_mm512_castps_si512(d), _mm512_setzero_si512()); // sign bits
+        }
+        return ok & _mm512_cmp_ps_mask(d_max, zero, _CMP_GT_OQ);
+    }
+#endif
     const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)), zero = _mm256_setzero_ps();
     unsigned usable = 0;
     octant[0] = octant[1] = octant[2] = 0;
@@ -167,6 +181,28 @@ inline unsigned slab_lanes(const float (&c)[6][RayPacket::size], float bound, fl
                            float (&org_inv_near)[3][RayPacket::size],
                            float (&org_inv_far)[3][RayPacket::size]) noexcept {
     constexpr float widen = slab_widen<float>, allowance = slab_allowance<float>;
+#if defined(__AVX512F__)
+    { // the 16 rays in one register
+        const __m512 no_overflow = _mm512_set1_ps(std::numeric_limits<float>::max() / 8.0f);
+        __mmask16 ok = 0xffff;
+        for (int a = 0; a < 3; ++a) {
+            const __m512 o = _mm512_loadu_ps(c[a]), d = _mm512_loadu_ps(c[3 + a]);
+            const __m512 i = _mm512_div_ps(_mm512_set1_ps(1.0f), d), i_far = _mm512_mul_ps(i, _mm512_set1_ps(widen));
+            // max(bound, |o|)·|inv_far| below max/8 (false for an infinite inv)
+            ok &=
+                _mm512_cmp_ps_mask(_mm512_mul_ps(max16(_mm512_abs_ps(o), _mm512_set1_ps(bound)), _mm512_abs_ps(i_far)),
+                                   no_overflow, _CMP_LT_OQ);
+            const __m512 o_i = _mm512_mul_ps(o, i), o_i_far = _mm512_mul_ps(o, i_far);
+            _mm512_store_ps(org[a], o);
+            _mm512_store_ps(inv[a], i);
+            _mm512_store_ps(inv_far[a], i_far);
+            _mm512_store_ps(org_inv_near[a], _mm512_fmadd_ps(_mm512_set1_ps(allowance), _mm512_abs_ps(o_i), o_i));
+            _mm512_store_ps(org_inv_far[a],
+                            _mm512_fnmadd_ps(_mm512_set1_ps(allowance), _mm512_abs_ps(o_i_far), o_i_far));
+        }
+        return ok;
+    }
+#endif
     const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
     const __m256 no_overflow = _mm256_set1_ps(std::numeric_limits<float>::max() / 8.0f);
     unsigned fast = 0;
@@ -217,109 +253,172 @@ struct alignas(64) SlabLanes {
     }
 };
 
-/// Sets up `p` from the rays in `c` (origin x, y, z, direction x, y, z; lane k = ray k < n ≤ 16)
-/// and their bounds t_max[0, n) (all 16 are read; lanes from n on are left out). First the
-/// packet: the rays with a finite, non-zero direction and t_max > 0 that share the first such
-/// ray's octant and lie within packet_cone_cos of its direction; then, eight lanes at a time,
-/// their slab constants by prepare_slab's rules (so as conservative), dropping any whose products
-/// could overflow (prepare_slab's robust form).
-/// Returns the rays in the packet (p.lanes), at least packet_min_rays, or 0; the others are for
-/// the single-ray path. 0 also when the packet's origins lie more than packet_origin_spread
-/// leaf sizes (`leaf_scale`) apart along an axis; p.wide tells that case.
-inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], int n,
-                            const float (&t_max)[RayPacket::size], float bound, float leaf_scale) noexcept {
-    p.wide = false;
-    for (int g = 0; g < RayPacket::size; g += 8) { // t_far = lane < n ? t_max : −1, eight lanes at a time
+// make_packet's parts, each for the 16 rays in one AVX-512 register where there is one, else
+// eight lanes at a time.
+
+// t_far = lane < n ? t_max : −1; returns the lanes with t_far > 0.
+inline unsigned packet_t_far_from(const float (&t_max)[RayPacket::size], int n,
+                                  float (&t_far)[RayPacket::size]) noexcept {
+#if defined(__AVX512F__)
+    const __m512 t = _mm512_mask_blend_ps(__mmask16((1u << n) - 1u), _mm512_set1_ps(-1.0f), _mm512_loadu_ps(t_max));
+    _mm512_store_ps(t_far, t);
+    return _mm512_cmp_ps_mask(t, _mm512_setzero_ps(), _CMP_GT_OQ);
+#else
+    unsigned reach = 0;
+    for (int g = 0; g < RayPacket::size; g += 8) {
         const __m256 within = _mm256_castsi256_ps(
             _mm256_cmpgt_epi32(_mm256_set1_epi32(n - g), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
-        _mm256_store_ps(p.t_far + g, _mm256_blendv_ps(_mm256_set1_ps(-1.0f), _mm256_loadu_ps(t_max + g), within));
+        const __m256 t = _mm256_blendv_ps(_mm256_set1_ps(-1.0f), _mm256_loadu_ps(t_max + g), within);
+        _mm256_store_ps(t_far + g, t);
+        reach |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t, _mm256_setzero_ps(), _CMP_GT_OQ))) << g;
     }
-    // The rays that may join, and their octants (sign bits): cheap tests first, so that an
-    // incoherent stream costs little here.
-    unsigned octant[3];
-    unsigned reach = 0; // t_far > 0
-    for (int g = 0; g < RayPacket::size; g += 8)
-        reach |=
-            unsigned(_mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(p.t_far + g), _mm256_setzero_ps(), _CMP_GT_OQ)))
-            << g;
-    const unsigned usable = rays_usable(c, octant) & reach;
-    if (!(usable & (usable - 1))) return 0; // fewer than two
-    const int first = lowest_bit(usable);
-    unsigned lanes = usable;
-    for (int a = 0; a < 3; ++a) lanes &= (octant[a] >> first) & 1u ? octant[a] : ~octant[a];
-    if (!(lanes & (lanes - 1))) return 0;
-    // Within the cone: d·d0 ≥ cos·|d|·|d0|.
+    return reach;
+#endif
+}
+
+// The lanes whose direction d lies within packet_cone_cos of ray `first`'s d0: d·d0 ≥ cos·|d|·|d0|.
+inline unsigned packet_cone(const float (&c)[6][RayPacket::size], int first) noexcept {
     const float d0x = c[3][first], d0y = c[4][first], d0z = c[5][first];
-    const float len0 = std::sqrt(d0x * d0x + d0y * d0y + d0z * d0z);
+    const float cos_len0 = packet_cone_cos * std::sqrt(d0x * d0x + d0y * d0y + d0z * d0z);
+#if defined(__AVX512F__)
+    const __m512 dx = _mm512_loadu_ps(c[3]), dy = _mm512_loadu_ps(c[4]), dz = _mm512_loadu_ps(c[5]);
+    const __m512 dd = _mm512_fmadd_ps(dz, dz, _mm512_fmadd_ps(dy, dy, _mm512_mul_ps(dx, dx)));
+    const __m512 d_d0 = _mm512_fmadd_ps(
+        dz, _mm512_set1_ps(d0z), _mm512_fmadd_ps(dy, _mm512_set1_ps(d0y), _mm512_mul_ps(dx, _mm512_set1_ps(d0x))));
+    return _mm512_cmp_ps_mask(d_d0, _mm512_mul_ps(_mm512_set1_ps(cos_len0), sqrt16(dd)), _CMP_GE_OQ);
+#else
     unsigned cone = 0;
     for (int g = 0; g < RayPacket::size; g += 8) {
         const __m256 dx = _mm256_load_ps(c[3] + g), dy = _mm256_load_ps(c[4] + g), dz = _mm256_load_ps(c[5] + g);
         const __m256 dd = _mm256_fmadd_ps(dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dx, dx)));
         const __m256 d_d0 = _mm256_fmadd_ps(
             dz, _mm256_set1_ps(d0z), _mm256_fmadd_ps(dy, _mm256_set1_ps(d0y), _mm256_mul_ps(dx, _mm256_set1_ps(d0x))));
-        const __m256 bound_cos = _mm256_mul_ps(_mm256_set1_ps(packet_cone_cos * len0), _mm256_sqrt_ps(dd));
+        const __m256 bound_cos = _mm256_mul_ps(_mm256_set1_ps(cos_len0), _mm256_sqrt_ps(dd));
         cone |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(d_d0, bound_cos, _CMP_GE_OQ))) << g;
     }
-    lanes &= cone;
-    if (bit_count(lanes) < packet_min_rays) return 0;
-    // The slab constants, as prepare_slab's fast form; a lane whose products could overflow
-    // leaves the packet.
-    const unsigned fast = slab_lanes(c, bound, p.org, p.inv, p.inv_far, p.org_inv_near, p.org_inv_far);
-    constexpr float widen = slab_widen<float>;
-    lanes &= fast;
-    if (bit_count(lanes) < packet_min_rays) return 0;
-    // Lanes outside the packet: never entered (t_far < 0), and out of the intervals.
-    const __m256 in[2] = {
+    return cone;
+#endif
+}
+
+// Over the lanes `in`: the least (lo) and greatest (hi) of the origins' coordinates (v = 0-2)
+// and of the inverse directions' components (v = 3-5). t_far of the other lanes becomes −1.
+inline void packet_ranges(RayPacket& p, const float (&c)[6][RayPacket::size], unsigned in, float (&lo)[6],
+                          float (&hi)[6]) noexcept {
+    const float* const v[6] = {c[0], c[1], c[2], p.inv[0], p.inv[1], p.inv[2]};
+#if defined(__AVX512F__)
+    // Twelve least values at once: the greatest are the negated least of the negated values.
+    // Four registers are halved together (two 256-bit shuffles, then two 128-bit ones, a min
+    // each), then each 128-bit block within itself. The shuffles are the maskz forms with full
+    // masks, as in avx512.hpp (GCC 12 warns of the plain ones' undefined operand).
+    const __mmask16 m = __mmask16(in);
+    _mm512_store_ps(p.t_far, _mm512_mask_blend_ps(m, _mm512_set1_ps(-1.0f), _mm512_load_ps(p.t_far)));
+    const __m512 pos_inf = _mm512_set1_ps(std::numeric_limits<float>::infinity());
+    const __m512i sign = _mm512_set1_epi32(std::numeric_limits<std::int32_t>::min());
+    __m512 x[12];
+    for (int k = 0; k < 6; ++k) {
+        const __m512 a = _mm512_loadu_ps(v[k]);
+        x[k] = _mm512_mask_blend_ps(m, pos_inf, a);
+        x[6 + k] =
+            _mm512_mask_blend_ps(m, pos_inf, _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(a), sign)));
+    }
+    alignas(64) float least[3][16];
+    for (int g = 0; g < 3; ++g) {
+        const __m512* a = x + 4 * g;
+        const __m512 ab = min16(_mm512_maskz_shuffle_f32x4(0xffff, a[0], a[1], 0x44),
+                                _mm512_maskz_shuffle_f32x4(0xffff, a[0], a[1], 0xee));
+        const __m512 cd = min16(_mm512_maskz_shuffle_f32x4(0xffff, a[2], a[3], 0x44),
+                                _mm512_maskz_shuffle_f32x4(0xffff, a[2], a[3], 0xee));
+        __m512 r =
+            min16(_mm512_maskz_shuffle_f32x4(0xffff, ab, cd, 0x88), _mm512_maskz_shuffle_f32x4(0xffff, ab, cd, 0xdd));
+        r = min16(r, _mm512_maskz_permute_ps(0xffff, r, 0xb1));
+        r = min16(r, _mm512_maskz_permute_ps(0xffff, r, 0x4e));
+        _mm512_store_ps(least[g], r); // the four values at lanes 0, 4, 8, 12
+    }
+    for (int k = 0; k < 6; ++k) lo[k] = least[k / 4][4 * (k % 4)], hi[k] = -least[(6 + k) / 4][4 * ((6 + k) % 4)];
+#else
+    const __m256 in8[2] = {
         _mm256_castsi256_ps(_mm256_cmpgt_epi32(
-            _mm256_and_si256(_mm256_set1_epi32(int(lanes)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+            _mm256_and_si256(_mm256_set1_epi32(int(in)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
             _mm256_setzero_si256())),
         _mm256_castsi256_ps(_mm256_cmpgt_epi32(
-            _mm256_and_si256(_mm256_set1_epi32(int(lanes >> 8)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+            _mm256_and_si256(_mm256_set1_epi32(int(in >> 8)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
             _mm256_setzero_si256()))};
     const __m256 pos_inf = _mm256_set1_ps(std::numeric_limits<float>::infinity()),
                  neg_inf = _mm256_set1_ps(-std::numeric_limits<float>::infinity());
     for (int g = 0; g < 2; ++g)
         _mm256_store_ps(p.t_far + 8 * g,
-                        _mm256_blendv_ps(_mm256_set1_ps(-1.0f), _mm256_load_ps(p.t_far + 8 * g), in[g]));
-    const auto lo = [&](const float* v) {
-        return lanes_min(_mm256_blendv_ps(pos_inf, _mm256_load_ps(v), in[0]),
-                         _mm256_blendv_ps(pos_inf, _mm256_load_ps(v + 8), in[1]));
-    };
-    const auto hi = [&](const float* v) {
-        return lanes_max(_mm256_blendv_ps(neg_inf, _mm256_load_ps(v), in[0]),
-                         _mm256_blendv_ps(neg_inf, _mm256_load_ps(v + 8), in[1]));
-    };
-    float o_lo[3], o_hi[3];
-    for (int a = 0; a < 3; ++a) {
-        o_lo[a] = lo(c[a]), o_hi[a] = hi(c[a]);
-        if (!(o_hi[a] - o_lo[a] <= packet_origin_spread * leaf_scale)) { // a wide beam (or an overflow)
+                        _mm256_blendv_ps(_mm256_set1_ps(-1.0f), _mm256_load_ps(p.t_far + 8 * g), in8[g]));
+    for (int k = 0; k < 6; ++k) {
+        lo[k] = lanes_min(_mm256_blendv_ps(pos_inf, _mm256_load_ps(v[k]), in8[0]),
+                          _mm256_blendv_ps(pos_inf, _mm256_load_ps(v[k] + 8), in8[1]));
+        hi[k] = lanes_max(_mm256_blendv_ps(neg_inf, _mm256_load_ps(v[k]), in8[0]),
+                          _mm256_blendv_ps(neg_inf, _mm256_load_ps(v[k] + 8), in8[1]));
+    }
+#endif
+}
+
+/// Sets up `p` from the rays in `c` (origin x, y, z, direction x, y, z; lane k = ray k < n ≤ 16)
+/// and their bounds t_max[0, n) (all 16 are read; lanes from n on are left out). First the
+/// packet: the rays with a finite, non-zero direction and t_max > 0 that share the first such
+/// ray's octant and lie within packet_cone_cos of its direction; then their slab constants by
+/// prepare_slab's rules (so as conservative), dropping any whose products could overflow
+/// (prepare_slab's robust form).
+/// Returns the rays in the packet (p.lanes), at least packet_min_rays, or 0; the others are for
+/// the single-ray path. 0 also when the packet's origins lie more than packet_origin_spread
+/// leaf sizes (`leaf_scale`) apart along an axis; p.wide tells that case.
+inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], int n,
+                            const float (&t_max)[RayPacket::size], float bound, float leaf_scale) noexcept {
+    p.wide = false;
+    // The rays that may join, and their octants (sign bits): cheap tests first, so that an
+    // incoherent stream costs little here.
+    unsigned octant[3];
+    const unsigned usable = rays_usable(c, octant) & packet_t_far_from(t_max, n, p.t_far);
+    if (!(usable & (usable - 1))) return 0; // fewer than two
+    const int first = lowest_bit(usable);
+    unsigned lanes = usable;
+    for (int a = 0; a < 3; ++a) lanes &= (octant[a] >> first) & 1u ? octant[a] : ~octant[a];
+    if (!(lanes & (lanes - 1))) return 0;
+    lanes &= packet_cone(c, first);
+    if (bit_count(lanes) < packet_min_rays) return 0;
+    // The slab constants, as prepare_slab's fast form; a lane whose products could overflow
+    // leaves the packet.
+    lanes &= slab_lanes(c, bound, p.org, p.inv, p.inv_far, p.org_inv_near, p.org_inv_far);
+    if (bit_count(lanes) < packet_min_rays) return 0;
+    // Lanes outside the packet: never entered (t_far < 0), and out of the intervals.
+    float lo[6], hi[6];
+    packet_ranges(p, c, lanes, lo, hi);
+    for (int a = 0; a < 3; ++a)
+        if (!(hi[a] - lo[a] <= packet_origin_spread * leaf_scale)) { // a wide beam (or an overflow)
             p.wide = true;
             return 0;
         }
-    }
     p.lanes = lanes;
     p.one_origin = true;
+    constexpr float widen = slab_widen<float>;
     for (int a = 0; a < 3; ++a) {
         const bool positive = !((octant[a] >> first) & 1u);
         slab_planes<float>(a, !positive, p.near_plane[a], p.far_plane[a]);
         // Entry (p − o)·inv is least at the largest p − o along the direction's sign: the
         // farthest-forward origin; the exit is greatest at the farthest-back one.
-        p.one_origin = p.one_origin && o_lo[a] == o_hi[a];
-        p.entry_org[a] = positive ? o_hi[a] : o_lo[a];
-        p.exit_org[a] = positive ? o_lo[a] : o_hi[a];
-        p.inv_lo[a] = lo(p.inv[a]), p.inv_hi[a] = hi(p.inv[a]);
+        p.one_origin = p.one_origin && lo[a] == hi[a];
+        const float entry_org = positive ? hi[a] : lo[a], exit_org = positive ? lo[a] : hi[a];
+        p.inv_lo[a] = lo[3 + a], p.inv_hi[a] = hi[3 + a];
         // inv_far = inv·widen rounded, monotonic in inv (widen > 0): its least and greatest
         // are those of inv times widen, bit for bit.
         p.far_lo[a] = p.inv_lo[a] * widen, p.far_hi[a] = p.inv_hi[a] * widen;
         // Each ray's fast slab distance p·inv − o·inv is within 6ε(|p| + |o|)|inv| of the exact
-        // one (prepare_slab's allowance included), and the interval products within 2u of theirs;
-        // |p| ≤ the tree's bound. A triangle the watertight test says a ray hits lies within
-        // 2.5ε(|p| + |o|) of the ray across it (its sheared vertices round by at most 5u of their
-        // distance from o, triangles_avx2.hpp), so the ray passes that near the triangle's box
-        // (the packet's triangle filter, triangle_bvh.hpp). 32ε covers all of it with room.
-        const float o_max = std::max(std::fabs(o_lo[a]), std::fabs(o_hi[a]));
+        // one (prepare_slab's allowance included); the interval's p·inv − (o·inv ± margin), in
+        // one FMA from these terms, within 2ε(|p| + |o|)|inv| + ε·margin of (p − o)·inv ∓ margin
+        // (three roundings); |p| ≤ the tree's bound. A triangle the watertight test says a ray
+        // hits lies within 2.5ε(|p| + |o|) of the ray across it (its sheared vertices round by
+        // at most 5u of their distance from o, triangles_avx2.hpp), so the ray passes that near
+        // the triangle's box (the packet's triangle filter, triangle_bvh.hpp). 32ε covers all
+        // of it with room.
+        const float o_max = std::max(std::fabs(lo[a]), std::fabs(hi[a]));
         const float inv_max = std::max(std::fabs(p.far_lo[a]), std::fabs(p.far_hi[a]));
-        p.margin[a] = 32 * std::numeric_limits<float>::epsilon() * (bound + o_max) * inv_max;
+        const float margin = 32 * std::numeric_limits<float>::epsilon() * (bound + o_max) * inv_max;
+        p.entry_lo[a] = entry_org * p.inv_lo[a] + margin, p.entry_hi[a] = entry_org * p.inv_hi[a] + margin;
+        p.exit_lo[a] = exit_org * p.far_lo[a] - margin, p.exit_hi[a] = exit_org * p.far_hi[a] - margin;
     }
     return lanes;
 }
@@ -328,17 +427,18 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
 // far) raise tn and lower tf. A function, always inlined with packet_hit_boxes and
 // packet_hit_children: written as a lambda, g++ left it out of line once the stream code around
 // walk_packet grew, and the terrain's camera rays ran 10-19% slower.
+// The entry (p − o)·inv − margin is least at one end of inv's range (the sign of p − o says
+// which), the exit greatest at one end of inv_far's: each end in one FMA, p·inv − (o·inv ±
+// margin) with the parenthesis made by make_packet.
 ISIN_DETAIL_INLINE void packet_slab(const RayPacket& p, int a, __m256 near, __m256 far, __m256& tn,
                                     __m256& tf) noexcept {
-    const __m256 margin = _mm256_set1_ps(p.margin[a]);
-    const __m256 dn = _mm256_sub_ps(near, _mm256_set1_ps(p.entry_org[a]));
-    const __m256 df = _mm256_sub_ps(far, _mm256_set1_ps(p.exit_org[a]));
     const __m256 entry =
-        _mm256_min_ps(_mm256_mul_ps(dn, _mm256_set1_ps(p.inv_lo[a])), _mm256_mul_ps(dn, _mm256_set1_ps(p.inv_hi[a])));
-    const __m256 exit =
-        _mm256_max_ps(_mm256_mul_ps(df, _mm256_set1_ps(p.far_lo[a])), _mm256_mul_ps(df, _mm256_set1_ps(p.far_hi[a])));
-    tn = _mm256_max_ps(tn, _mm256_sub_ps(entry, margin));
-    tf = _mm256_min_ps(tf, _mm256_add_ps(exit, margin));
+        _mm256_min_ps(_mm256_fmsub_ps(near, _mm256_set1_ps(p.inv_lo[a]), _mm256_set1_ps(p.entry_lo[a])),
+                      _mm256_fmsub_ps(near, _mm256_set1_ps(p.inv_hi[a]), _mm256_set1_ps(p.entry_hi[a])));
+    const __m256 exit = _mm256_max_ps(_mm256_fmsub_ps(far, _mm256_set1_ps(p.far_lo[a]), _mm256_set1_ps(p.exit_lo[a])),
+                                      _mm256_fmsub_ps(far, _mm256_set1_ps(p.far_hi[a]), _mm256_set1_ps(p.exit_hi[a])));
+    tn = _mm256_max_ps(tn, entry);
+    tf = _mm256_min_ps(tf, exit);
 }
 
 /// The interval slab test of 8 boxes for the whole packet, each box given per axis by its plane
