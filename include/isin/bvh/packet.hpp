@@ -172,7 +172,8 @@ inline unsigned rays_usable(const float (&c)[6][RayPacket::size], unsigned (&oct
     return usable;
 }
 
-/// prepare_slab's fast-form terms of the 16 rays of `c`, eight lanes at a time, by its rules
+/// prepare_slab's fast-form terms of the 16 rays of `c` (in one AVX-512 register where there is
+/// one, else eight lanes at a time), by its rules
 /// (so as conservative; o·inv's allowance is added in one FMA): origin, inv, inv_far and the
 /// raised and lowered o·inv. Returns the lanes whose products cannot overflow (prepare_slab's
 /// `robust` is false for them).
