@@ -12,6 +12,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -452,6 +453,74 @@ TEST_CASE("Bvh stream: rays whose origins lie many leaf sizes apart form no pack
     }
     CHECK(hit == 8);
     CHECK(wrong == 0);
+}
+
+TEST_CASE("Bvh packets: two packets walked as one offer each ray every leaf its own walk enters") {
+#if defined(ISIN_DETAIL_PACKETS)
+    // Pairs of adjacent 4×4 tiles of camera rays, from one eye and (shadow rays' case) from
+    // origins scattered about it, walked together under their joint interval test
+    // (walk_packets, as the stream calls do): every leaf a ray's own walk enters (no hit lowers
+    // t_far here, so that is every leaf along the ray) must be offered to that ray.
+    const auto tris = workloads::triangle_soup<float>(4000, 9, 1.5);
+    const isin::Bvh<float> bvh{tris};
+    const auto& tree = bvh.tree();
+    std::mt19937_64 rng(12);
+    std::uniform_real_distribution<float> jitter(-0.05f, 0.05f);
+    for (const bool scattered : {false, true}) {
+        CAPTURE(scattered);
+        auto rays = tiled_camera_rays<float>({0.3f, -0.2f, -25}, 0.6f, 64, 48);
+        if (scattered)
+            for (auto& r : rays) r.origin = r.origin + isin::Vertex<float>{jitter(rng), jitter(rng), jitter(rng)};
+        float t_max[16];
+        for (float& t : t_max) t = std::numeric_limits<float>::infinity();
+        int pairs = 0, entered = 0, missed = 0;
+        for (std::size_t first = 0; first + 32 <= rays.size(); first += 32) {
+            alignas(64) float c[2][6][16];
+            isin::detail::RayPacket p[2];
+            bool made = true;
+            for (std::size_t j = 0; j < 2; ++j) {
+                for (std::size_t k = 0; k < 16; ++k)
+                    for (int a = 0; a < 3; ++a)
+                        c[j][a][k] = isin::component(rays[first + 16 * j + k].origin, a),
+                        c[j][3 + a][k] = isin::component(rays[first + 16 * j + k].direction, a);
+                made = made &&
+                       isin::detail::make_packet(p[j], c[j], 16, t_max, tree.bound(), tree.leaf_scale()) == 0xffffu;
+            }
+            if (!made) continue;
+            bool negative[3];
+            for (int a = 0; a < 3; ++a) negative[a] = !isin::detail::packet_positive(p[0], a);
+            if (negative[0] != !isin::detail::packet_positive(p[1], 0) ||
+                negative[1] != !isin::detail::packet_positive(p[1], 1) ||
+                negative[2] != !isin::detail::packet_positive(p[1], 2))
+                continue; // other octants: the stream calls walk them one by one
+            float lo[6], hi[6];
+            for (int v = 0; v < 6; ++v)
+                lo[v] = std::min(p[0].lo[v], p[1].lo[v]), hi[v] = std::max(p[0].hi[v], p[1].hi[v]);
+            isin::detail::PacketBounds box;
+            isin::detail::set_packet_bounds(box, lo, hi, negative, tree.bound());
+            CHECK(box.one_origin == !scattered);
+            std::vector<std::set<std::uint32_t>> offered(32);
+            isin::detail::RayPacket* const both[2] = {&p[0], &p[1]};
+            isin::detail::walk_packets<isin::Visit::nearest>(tree, both, box, [&](std::uint32_t leaf, unsigned active) {
+                for (; active; active &= active - 1)
+                    offered[std::size_t(isin::detail::lowest_bit(active))].insert(leaf);
+                return 0u;
+            });
+            ++pairs;
+            for (std::size_t k = 0; k < 32; ++k) {
+                float t = std::numeric_limits<float>::infinity();
+                isin::traverse<isin::Visit::nearest>(tree, rays[first + k], t, [&](std::uint32_t leaf, float&) {
+                    ++entered;
+                    missed += !offered[k].count(leaf);
+                    return false;
+                });
+            }
+        }
+        CHECK(pairs > 40);
+        CHECK(entered > 1000);
+        CHECK(missed == 0);
+    }
+#endif
 }
 
 TEST_CASE("Bvh packets: two rays' block test in one register gives each ray's own test bit for bit") {

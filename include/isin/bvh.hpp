@@ -5,7 +5,8 @@
 ///  - bvh/build.hpp     build_bvh: binned SAH on several threads, collapsed to 8-wide nodes for the
 ///                      least SAH cost (Ylitie, Karras & Laine 2017); any input builds
 ///  - bvh/traverse.hpp  traverse<Visit>: the caller's leaf test for the nearest, any or all hits
-///  - bvh/packet.hpp   walk_packet: 16 coherent rays at once, one interval test per node
+///  - bvh/packet.hpp   walk_packets: 16 coherent rays at once (or two such packets), one
+///                      interval test per node
 ///  - bvh/triangles.hpp the triangle leaves: blocks of 8, the watertight test on 8 lanes
 ///                      (triangles_avx2.hpp: its AVX2 + FMA form)
 ///  - bvh/triangle_bvh.hpp  Bvh<T>: all of it for triangles, with culling and skip filters

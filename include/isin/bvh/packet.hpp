@@ -9,6 +9,8 @@
 /// lane on the rays), so that a child no ray enters is dropped (shadow rays from a patch of
 /// surface spread their origins: with the interval test alone they ran 1.9× slower). Packets
 /// whose rays share one origin (a pinhole camera's) take the rays' tests at leaves only.
+/// Two packets that agree (camera rays of adjacent 4×4 tiles) may be walked together under one
+/// interval test over both (walk_packets): one walk's node steps serve 32 rays.
 /// Packets need AVX2 + FMA and float (ISIN_DETAIL_PACKETS); callers fall back to single rays
 /// elsewhere, and for rays that are not coherent (make_packet says which).
 #include <cstddef>
@@ -25,22 +27,30 @@
 namespace isin {
 namespace detail {
 
-/// The slab constants of up to 16 rays (lanes = rays, SlabRay's fast form) and the intervals
-/// the packet's node test works with.
-struct alignas(64) RayPacket {
-    static constexpr int size = 16;
-    float org[3][size], inv[3][size], org_inv_near[3][size], inv_far[3][size], org_inv_far[3][size];
-    /// Per ray: hits count below this (the leaf lowers it); −1 for lanes not (or no longer) traced.
-    float t_far[size];
-    // Per axis, the interval test's terms (packet_slab): the range of inv (inv_far), and each
-    // end times the origin that gives the earliest entry (latest exit), less (plus) an absolute
-    // allowance for the rounding of both the rays' own slab distances and the interval's.
+/// The terms of a packet's interval test (packet_slab), for the rays of one packet or of two
+/// traced together (walk_packets).
+struct PacketBounds {
+    // Per axis: the range of inv (inv_far), and each end times the origin that gives the
+    // earliest entry (latest exit), less (plus) an absolute allowance for the rounding of both
+    // the rays' own slab distances and the interval's.
     float inv_lo[3], inv_hi[3], far_lo[3], far_hi[3], entry_lo[3], entry_hi[3], exit_lo[3], exit_hi[3];
     std::size_t near_plane[3], far_plane[3]; // shared by every ray: one octant
-    unsigned lanes = 0;                      // rays in the packet
     /// Every ray starts at the same point (a pinhole camera's rays): the interval test is then
-    /// a frustum's, and the rays' own tests run only at leaves (walk_packet).
+    /// a frustum's, and the rays' own tests run only at leaves (walk_packets).
     bool one_origin = false;
+    /// The least and greatest of the rays' origins' coordinates (0-2) and inverse directions'
+    /// components (3-5).
+    float lo[6], hi[6];
+};
+
+/// The slab constants of up to 16 rays (lanes = rays, SlabRay's fast form) and the intervals
+/// the packet's node test works with.
+struct alignas(64) RayPacket : PacketBounds {
+    static constexpr int size = 16;
+    alignas(64) float org[3][size], inv[3][size], org_inv_near[3][size], inv_far[3][size], org_inv_far[3][size];
+    /// Per ray: hits count below this (the leaf lowers it); −1 for lanes not (or no longer) traced.
+    float t_far[size];
+    unsigned lanes = 0; // rays in the packet
     /// make_packet left the rays out because their origins lie too far apart
     /// (packet_origin_spread), though their directions agree.
     bool wide = false;
@@ -358,6 +368,41 @@ inline void packet_ranges(RayPacket& p, const float (&c)[6][RayPacket::size], un
 #endif
 }
 
+/// The interval test's terms of rays whose origins' coordinates and inverse directions'
+/// components lie in [lo, hi] (as PacketBounds::lo, hi), all in the octant `negative` gives
+/// (per axis, whether their directions point towards −axis), in a tree of bound `bound`.
+inline void set_packet_bounds(PacketBounds& b, const float (&lo)[6], const float (&hi)[6], const bool (&negative)[3],
+                              float bound) noexcept {
+    constexpr float widen = slab_widen<float>;
+    b.one_origin = true;
+    for (int k = 0; k < 6; ++k) b.lo[k] = lo[k], b.hi[k] = hi[k];
+    for (int a = 0; a < 3; ++a) {
+        const bool positive = !negative[a];
+        slab_planes<float>(a, negative[a], b.near_plane[a], b.far_plane[a]);
+        // Entry (p − o)·inv is least at the largest p − o along the direction's sign: the
+        // farthest-forward origin; the exit is greatest at the farthest-back one.
+        b.one_origin = b.one_origin && lo[a] == hi[a];
+        const float entry_org = positive ? hi[a] : lo[a], exit_org = positive ? lo[a] : hi[a];
+        b.inv_lo[a] = lo[3 + a], b.inv_hi[a] = hi[3 + a];
+        // inv_far = inv·widen rounded, monotonic in inv (widen > 0): its least and greatest
+        // are those of inv times widen, bit for bit.
+        b.far_lo[a] = b.inv_lo[a] * widen, b.far_hi[a] = b.inv_hi[a] * widen;
+        // Each ray's fast slab distance p·inv − o·inv is within 6ε(|p| + |o|)|inv| of the exact
+        // one (prepare_slab's allowance included); the interval's p·inv − (o·inv ± margin), in
+        // one FMA from these terms, within 2ε(|p| + |o|)|inv| + ε·margin of (p − o)·inv ∓ margin
+        // (three roundings); |p| ≤ the tree's bound. A triangle the watertight test says a ray
+        // hits lies within 2.5ε(|p| + |o|) of the ray across it (its sheared vertices round by
+        // at most 5u of their distance from o, triangles_avx2.hpp), so the ray passes that near
+        // the triangle's box (the packet's triangle filter, triangle_bvh.hpp). 32ε covers all
+        // of it with room.
+        const float o_max = std::max(std::fabs(lo[a]), std::fabs(hi[a]));
+        const float inv_max = std::max(std::fabs(b.far_lo[a]), std::fabs(b.far_hi[a]));
+        const float margin = 32 * std::numeric_limits<float>::epsilon() * (bound + o_max) * inv_max;
+        b.entry_lo[a] = entry_org * b.inv_lo[a] + margin, b.entry_hi[a] = entry_org * b.inv_hi[a] + margin;
+        b.exit_lo[a] = exit_org * b.far_lo[a] - margin, b.exit_hi[a] = exit_org * b.far_hi[a] - margin;
+    }
+}
+
 /// Sets up `p` from the rays in `c` (origin x, y, z, direction x, y, z; lane k = ray k < n ≤ 16)
 /// and their bounds t_max[0, n) (all 16 are read; lanes from n on are left out). First the
 /// packet: the rays with a finite, non-zero direction and t_max > 0 that share the first such
@@ -394,33 +439,9 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
             return 0;
         }
     p.lanes = lanes;
-    p.one_origin = true;
-    constexpr float widen = slab_widen<float>;
-    for (int a = 0; a < 3; ++a) {
-        const bool positive = !((octant[a] >> first) & 1u);
-        slab_planes<float>(a, !positive, p.near_plane[a], p.far_plane[a]);
-        // Entry (p − o)·inv is least at the largest p − o along the direction's sign: the
-        // farthest-forward origin; the exit is greatest at the farthest-back one.
-        p.one_origin = p.one_origin && lo[a] == hi[a];
-        const float entry_org = positive ? hi[a] : lo[a], exit_org = positive ? lo[a] : hi[a];
-        p.inv_lo[a] = lo[3 + a], p.inv_hi[a] = hi[3 + a];
-        // inv_far = inv·widen rounded, monotonic in inv (widen > 0): its least and greatest
-        // are those of inv times widen, bit for bit.
-        p.far_lo[a] = p.inv_lo[a] * widen, p.far_hi[a] = p.inv_hi[a] * widen;
-        // Each ray's fast slab distance p·inv − o·inv is within 6ε(|p| + |o|)|inv| of the exact
-        // one (prepare_slab's allowance included); the interval's p·inv − (o·inv ± margin), in
-        // one FMA from these terms, within 2ε(|p| + |o|)|inv| + ε·margin of (p − o)·inv ∓ margin
-        // (three roundings); |p| ≤ the tree's bound. A triangle the watertight test says a ray
-        // hits lies within 2.5ε(|p| + |o|) of the ray across it (its sheared vertices round by
-        // at most 5u of their distance from o, triangles_avx2.hpp), so the ray passes that near
-        // the triangle's box (the packet's triangle filter, triangle_bvh.hpp). 32ε covers all
-        // of it with room.
-        const float o_max = std::max(std::fabs(lo[a]), std::fabs(hi[a]));
-        const float inv_max = std::max(std::fabs(p.far_lo[a]), std::fabs(p.far_hi[a]));
-        const float margin = 32 * std::numeric_limits<float>::epsilon() * (bound + o_max) * inv_max;
-        p.entry_lo[a] = entry_org * p.inv_lo[a] + margin, p.entry_hi[a] = entry_org * p.inv_hi[a] + margin;
-        p.exit_lo[a] = exit_org * p.far_lo[a] - margin, p.exit_hi[a] = exit_org * p.far_hi[a] - margin;
-    }
+    bool negative[3];
+    for (int a = 0; a < 3; ++a) negative[a] = (octant[a] >> first) & 1u;
+    set_packet_bounds(p, lo, hi, negative, bound);
     return lanes;
 }
 
@@ -431,7 +452,7 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
 // The entry (p − o)·inv − margin is least at one end of inv's range (the sign of p − o says
 // which), the exit greatest at one end of inv_far's: each end in one FMA, p·inv − (o·inv ±
 // margin) with the parenthesis made by make_packet.
-ISIN_DETAIL_INLINE void packet_slab(const RayPacket& p, int a, __m256 near, __m256 far, __m256& tn,
+ISIN_DETAIL_INLINE void packet_slab(const PacketBounds& p, int a, __m256 near, __m256 far, __m256& tn,
                                     __m256& tf) noexcept {
     const __m256 entry =
         _mm256_min_ps(_mm256_fmsub_ps(near, _mm256_set1_ps(p.inv_lo[a]), _mm256_set1_ps(p.entry_lo[a])),
@@ -450,7 +471,7 @@ ISIN_DETAIL_INLINE void packet_slab(const RayPacket& p, int a, __m256 near, __m2
 /// an absolute allowance along each axis of 32ε·(bound + |o|), far more than the rays' own slab
 /// tests and the interval products round.
 template <class Planes>
-ISIN_DETAIL_INLINE unsigned packet_hit_boxes(const Planes& planes, const RayPacket& p, float t_far,
+ISIN_DETAIL_INLINE unsigned packet_hit_boxes(const Planes& planes, const PacketBounds& p, float t_far,
                                              __m256& t_near) noexcept {
     __m256 tn = _mm256_setzero_ps(), tf = _mm256_set1_ps(t_far), near, far;
     // Axis by axis, written out: as a loop over arrays of planes, g++ -O2 kept them on the stack.
@@ -462,7 +483,7 @@ ISIN_DETAIL_INLINE unsigned packet_hit_boxes(const Planes& planes, const RayPack
 }
 
 /// packet_hit_boxes on a node's 8 children: every child a ray of the packet enters is set.
-ISIN_DETAIL_INLINE unsigned packet_hit_children(const BvhTree<float>::Node& n, const RayPacket& p, float t_far,
+ISIN_DETAIL_INLINE unsigned packet_hit_children(const BvhTree<float>::Node& n, const PacketBounds& p, float t_far,
                                                 float (&t_near)[8]) noexcept {
     __m256 tn;
     const unsigned mask = packet_hit_boxes(
@@ -476,7 +497,7 @@ ISIN_DETAIL_INLINE unsigned packet_hit_children(const BvhTree<float>::Node& n, c
 }
 
 /// Whether the packet's rays travel towards +axis `a` (its near planes are the boxes' lo).
-inline bool packet_positive(const RayPacket& p, int a) noexcept {
+inline bool packet_positive(const PacketBounds& p, int a) noexcept {
     return p.near_plane[a] < sizeof(BvhTree<float>::Node::lo);
 }
 
@@ -527,37 +548,59 @@ inline float packet_t_far(const RayPacket& p) noexcept {
     return _mm_cvtss_f32(h);
 }
 
-/// Traces the packet through `tree`, nearest-first by the packet's entry bounds
-/// (Visit::nearest) or in any order (Visit::any). At a node, the interval test picks the
-/// children some ray of the packet may enter, and each ray's own slab test keeps those that one
-/// does (with the rays that do). At each leaf some of its rays
-/// enter, calls `leaf(leaf_index, rays, p.t_far)` with the mask of those rays; the leaf lowers
-/// their t_far (nearest) and returns the rays it is done with (any: they leave the packet).
-/// Stops when the stack is empty or no ray is left.
-template <Visit visit, class Leaf>
-void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
+/// Traces N packets (1 or 2) through `tree` together, nearest-first by the entry bounds of the
+/// interval test (Visit::nearest) or in any order (Visit::any): ray k of packet i is ray
+/// 16·i + k of the walk. The interval test is on `box`, which bounds the rays of all of them
+/// (a packet's own, or set_packet_bounds over both packets' ranges). At a node, the interval
+/// test picks the children some ray may enter, and each ray's own slab test keeps those that
+/// one does (with the rays that do). At each leaf some of the rays enter, calls
+/// `leaf(leaf_index, rays)` with the mask of those rays; the leaf lowers their t_far (nearest)
+/// and returns the rays it is done with (any: they leave their packet). Stops when the stack is
+/// empty or no ray is left.
+template <Visit visit, std::size_t N, class Leaf>
+void walk_packets(const BvhTree<float>& tree, RayPacket* const (&ps)[N], const PacketBounds& box, Leaf&& leaf) {
+    static_assert(N == 1 || N == 2, "one packet or two");
     using Node = BvhTree<float>::Node;
     constexpr std::uint32_t leaf_bit = BvhTree<float>::leaf_bit;
     struct Entry {
         std::uint32_t ref;
-        float t;                    // no ray of the packet enters it before this
+        float t;                    // no ray enters it before this
         unsigned rays;              // the rays that enter it (when it was pushed)
         std::uint32_t parent, slot; // where its box is: child `slot` of node `parent`
         std::uint32_t tested;       // the leaf calls before the rays' own tests gave `rays` (+ 1; 0: not tested)
     };
+    const auto lanes = [&ps] { return N == 1 ? ps[0]->lanes : ps[0]->lanes | ps[N - 1]->lanes << 16; };
+    const auto t_far_of_all = [&ps] {
+        return N == 1 ? packet_t_far(*ps[0]) : std::max(packet_t_far(*ps[0]), packet_t_far(*ps[N - 1]));
+    };
+    // The rays that enter child k of n before their own t_far.
+    const auto entering = [&ps](const Node& n, int k) {
+        const unsigned a = packet_rays_entering(n, k, *ps[0]);
+        return N == 1 ? a : a | packet_rays_entering(n, k, *ps[N - 1]) << 16;
+    };
+    // The rays `done` leave their packets.
+    const auto leave = [&ps](unsigned done) {
+        for (; done; done &= done - 1) {
+            const int k = lowest_bit(done);
+            RayPacket& p = *ps[std::size_t(k >> 4)];
+            p.lanes &= ~(1u << (k & 15));
+            p.t_far[k & 15] = -1.0f;
+        }
+    };
     Entry stack[7 * BvhTree<float>::depth_limit + 1];
     int top = 0;
-    Entry e{0, 0.0f, p.lanes, 0, 0, 0}; // the root node
+    Entry e{0, 0.0f, lanes(), 0, 0, 0}; // the root node
     // Leaf calls so far (each may lower some t_far): a leaf's rays tested when it was pushed,
     // with no leaf call since, need no second test.
     std::uint32_t calls = 0;
     const Node* const nodes = tree.nodes().data();
-    float t_packet = packet_t_far(p);
+    float t_packet = t_far_of_all();
     if (!(t_packet > 0.0f)) return;
     for (;;) {
-        if (!(e.ref & leaf_bit) && bit_count(e.rays & p.lanes) <= packet_single_rays) {
-            for (unsigned rays = e.rays & p.lanes; rays; rays &= rays - 1) { // each ray alone
-                const int k = lowest_bit(rays);
+        if (!(e.ref & leaf_bit) && bit_count(e.rays & lanes()) <= packet_single_rays) {
+            for (unsigned rays = e.rays & lanes(); rays; rays &= rays - 1) { // each ray alone
+                const int i = lowest_bit(rays), k = i & 15;
+                RayPacket& p = *ps[std::size_t(i >> 4)];
                 SlabRay<float> r;
                 for (int a = 0; a < 3; ++a) {
                     r.org[a] = p.org[a][k], r.inv[a] = p.inv[a][k], r.inv_far[a] = p.inv_far[a][k];
@@ -566,46 +609,43 @@ void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
                 }
                 r.ok = true, r.robust = false;
                 auto one = [&](std::uint32_t leaf_index, float&) {
-                    return ((leaf(leaf_index, 1u << k, p.t_far) >> k) & 1u) != 0;
+                    return ((leaf(leaf_index, 1u << i) >> i) & 1u) != 0;
                 };
                 ++calls;
-                if (walk<visit, false>(tree, r, p.t_far[k], one, e.ref)) { // any: this ray is done
-                    p.lanes &= ~(1u << k);
-                    p.t_far[k] = -1.0f;
-                }
+                if (walk<visit, false>(tree, r, p.t_far[k], one, e.ref)) leave(1u << i); // any: this ray is done
             }
-            if (!p.lanes) return;
-            t_packet = packet_t_far(p);
+            if (!lanes()) return;
+            t_packet = t_far_of_all();
         } else if (e.ref & leaf_bit) {
             // Nearest: t_far fell since the entry was pushed, so the rays are tested again.
             const unsigned rays = visit == Visit::any || e.tested == calls + 1
-                                      ? e.rays & p.lanes
-                                      : packet_rays_entering(nodes[e.parent], int(e.slot), p) & p.lanes;
+                                      ? e.rays & lanes()
+                                      : entering(nodes[e.parent], int(e.slot)) & lanes();
             if (rays) {
                 ++calls;
-                const unsigned done = leaf(e.ref & ~leaf_bit, rays, p.t_far);
+                const unsigned done = leaf(e.ref & ~leaf_bit, rays);
                 if (done) {
-                    p.lanes &= ~done;
-                    for (unsigned d = done; d; d &= d - 1) p.t_far[lowest_bit(d)] = -1.0f;
-                    if (!p.lanes) return;
+                    leave(done);
+                    if (!lanes()) return;
                 }
-                t_packet = packet_t_far(p);
+                t_packet = t_far_of_all();
             }
         } else {
             const Node& n = nodes[e.ref];
             float t_near[8];
             unsigned rays[8];
-            unsigned mask = packet_hit_children(n, p, t_packet, t_near);
+            unsigned mask = packet_hit_children(n, box, t_packet, t_near);
             // Each ray's own test: the children one enters. With one origin, inner children
             // take the interval test's word (a frustum's: one ray's entry is seldom dropped
             // where the packet's is not) and the rays' tests wait for the leaves. Measured,
             // primary rays on the five benchmark meshes, same process, medians of 9-11, four
             // runs: 0.96-1.17× as fast as with every ray's test, most runs 1.02-1.09×.
             unsigned tested[8];
+            const unsigned live = lanes();
             for (unsigned m = mask; m; m &= m - 1) {
                 const int k = lowest_bit(m);
-                const bool own = !p.one_origin || (n.child[k] & leaf_bit);
-                rays[k] = own ? packet_rays_entering(n, k, p) & p.lanes : e.rays & p.lanes;
+                const bool own = !box.one_origin || (n.child[k] & leaf_bit);
+                rays[k] = own ? entering(n, k) & live : e.rays & live;
                 tested[k] = own ? calls + 1 : 0;
                 if (!rays[k]) mask &= ~(1u << k);
             }
@@ -638,9 +678,16 @@ void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
         for (;;) { // the next entry some ray may still reach
             if (top == 0) return;
             e = stack[--top];
-            if (e.t < t_packet && (e.rays & p.lanes)) break;
+            if (e.t < t_packet && (e.rays & lanes())) break;
         }
     }
+}
+
+/// One packet's walk (walk_packets): `leaf(leaf_index, rays)`, rays a mask of its lanes.
+template <Visit visit, class Leaf>
+void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
+    RayPacket* const ps[1] = {&p};
+    walk_packets<visit>(tree, ps, p, leaf);
 }
 
 } // namespace detail

@@ -122,7 +122,8 @@ public:
     /// the same hits bit for bit. Rays are taken 16 at a time; 16 consecutive rays that start
     /// close together and point the same way (a 4×4 tile of camera rays, shadow rays from such a
     /// tile towards one light) are traced as one packet (float with AVX2 + FMA), faster than
-    /// one by one; rays that are not go two at a time with their walks interleaved (traverse_pair).
+    /// one by one, and two such packets in a row that also agree with each other share one walk;
+    /// rays that are not go two at a time with their walks interleaved (traverse_pair).
     void intersect(const Ray<T>* rays, std::size_t count, Hit<T>* hits, const HitFilter& filter = {}) const noexcept {
         intersect(rays, count, nullptr, hits, filter);
     }
@@ -293,32 +294,22 @@ private:
     // The traversal's bound over a hit's t: t·(1 + 2⁻¹⁶), one rounding (take_nearest).
     static constexpr T tie_room = T(1) + T(0x1p-16);
 
-    // Up to 16 rays of a stream: nearest hits (visit = nearest, into hits) or occlusion (into
-    // blocked). Coherent rays go as a packet (packet.hpp), the others two at a time (traverse_pair).
-    // Returns whether the rays were coherent: a packet was traced, or the rays' directions agreed
-    // but their origins lay too far apart for one (RayPacket::wide).
+    // The rays first + k of a chunk of a stream (k in `rest`, n rays from `first`) that no packet
+    // took: nearest hits (visit = nearest, into hits) or occlusion (into blocked), two at a time
+    // (traverse_pair), their set-up made in lanes where there are packets (trace_rest_in_lanes).
     template <Visit visit, class Rays>
-    bool trace_chunk(const Rays& rays, std::size_t first, int n, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
-                     const HitFilter& filter, bool try_packet) const noexcept {
-        const unsigned all = (1u << n) - 1u;
+    void trace_unpacked(const Rays& rays, std::size_t first, int n, unsigned rest, const T* t_max, Hit<T>* hits,
+                        std::uint8_t* blocked, const HitFilter& filter) const noexcept {
 #if defined(ISIN_DETAIL_PACKETS)
         if constexpr (std::is_same_v<T, float>) {
-            if (n > 1 && !tree_.empty()) {
-                bool wide = false;
-                const unsigned packed =
-                    try_packet ? trace_packet<visit>(rays, first, n, t_max, hits, blocked, filter, wide) : 0u;
-                const unsigned rest = all & ~packed;
-                if (rest & (rest - 1))
-                    trace_rest_in_lanes<visit>(rays, first, n, rest, t_max, hits, blocked, filter);
-                else
-                    trace_rest<visit>(rays, first, rest, t_max, hits, blocked, filter, prepare_one(rays, first));
-                return packed != 0 || wide;
+            if ((rest & (rest - 1)) && !tree_.empty()) {
+                trace_rest_in_lanes<visit>(rays, first, n, rest, t_max, hits, blocked, filter);
+                return;
             }
         }
 #endif
-        (void)try_packet;
-        trace_rest<visit>(rays, first, all, t_max, hits, blocked, filter, prepare_one(rays, first));
-        return false;
+        (void)n;
+        trace_rest<visit>(rays, first, rest, t_max, hits, blocked, filter, prepare_one(rays, first));
     }
 
 #if defined(ISIN_DETAIL_PACKETS)
@@ -407,16 +398,33 @@ private:
         }
     };
 
-    // The packet part of trace_chunk (float): returns the rays it traced; `wide` when it traced
-    // none because their origins lay too far apart (RayPacket::wide).
-    template <Visit visit, class Rays>
-    ISIN_DETAIL_NOINLINE unsigned trace_packet(const Rays& rays, std::size_t first, int n, const float* t_max,
-                                               Hit<float>* hits, std::uint8_t* blocked, const HitFilter& filter,
-                                               bool& wide) const noexcept {
-        constexpr int size = detail::RayPacket::size;
+    // A packet of a stream being traced: its rays lane by lane, the packet, the leaves' state of
+    // its rays and their nearest hits.
+    struct PacketTrace {
+        static constexpr int size = detail::RayPacket::size;
         alignas(64) float c[6][size]; // the rays, lane by lane (make_packet tells incoherent ones first)
-        detail::load_packet_rays(rays, first, n, c);
-        alignas(32) float limit[size];
+        detail::RayPacket p;
+        // The leaves' state of a ray is made when it reaches its first leaf (no constructor runs
+        // for the others: most rays of a frame that miss never do).
+        union LeafRays {
+            detail::TriangleRay<float> lane[size];
+            LeafRays() noexcept {}
+        } tri;
+        unsigned made = 0;         // the lanes of tri constructed
+        detail::ShearLanes shears; // all the rays' shears at once, when the first leaf is reached
+        bool shears_made = false;
+        NearestLanes nearest;
+    };
+
+    // Sets up `s` for the rays [first, first + n) of a stream (n ≥ 2): returns the rays
+    // make_packet takes (s.p.lanes; 0 for none, and then s.p.wide tells whether their origins
+    // lay too far apart).
+    template <Visit visit, class Rays>
+    unsigned start_packet(PacketTrace& s, const Rays& rays, std::size_t first, int n,
+                          const float* t_max) const noexcept {
+        constexpr int size = PacketTrace::size;
+        detail::load_packet_rays(rays, first, n, s.c);
+        alignas(32) float limit[detail::RayPacket::size];
         if (!t_max) {
             _mm256_store_ps(limit, _mm256_set1_ps(std::numeric_limits<float>::infinity()));
             _mm256_store_ps(limit + 8, _mm256_set1_ps(std::numeric_limits<float>::infinity()));
@@ -426,95 +434,152 @@ private:
         } else {
             for (int k = 0; k < size; ++k) limit[k] = t_max[first + std::size_t(k < n ? k : 0)];
         }
-        detail::RayPacket p;
-        const unsigned lanes = detail::make_packet(p, c, n, limit, tree_.bound(), tree_.leaf_scale());
-        wide = p.wide;
-        if (!lanes) return 0;
-        // The leaves' state of a ray is made when it reaches its first leaf (no constructor runs
-        // for the others: most rays of a frame that miss never do), and the nearest hits go
-        // straight into the caller's array.
-        union LeafRays {
-            detail::TriangleRay<float> lane[size];
-            LeafRays() noexcept {}
-        } leaf_rays;
-        detail::TriangleRay<float>* const tri = leaf_rays.lane;
-        unsigned made = 0;         // the lanes of tri constructed
-        detail::ShearLanes shears; // all the rays' shears at once, when the first leaf is reached
-        bool shears_made = false;
-        NearestLanes nearest;
-        if constexpr (visit == Visit::nearest)
-            for (int k = 0; k < size; ++k) nearest.set(k, Hit<float>{}); // no hit
-        const auto walk = [&](auto cull) {
-            constexpr bool culls = decltype(cull)::value;
-            detail::walk_packet<visit>(tree_, p, [&](std::uint32_t leaf, unsigned active, float(&t_far)[16]) {
-                if (!shears_made) detail::set_shears(c[3], c[4], c[5], shears), shears_made = true;
-                unsigned done = 0;
-#if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
-                active =
-                    rays_in_lanes<culls, visit>(blocks_[leaf], p, shears, active, t_far, nearest, filter.skip, done);
-#endif
-                for (unsigned fresh = active & ~made; fresh; fresh &= fresh - 1) {
-                    const int k = detail::lowest_bit(fresh);
-                    new (tri + k)
-                        detail::TriangleRay<float>(Ray<float>{{c[0][k], c[1][k], c[2][k]}, {c[3][k], c[4][k], c[5][k]}},
-                                                   shears.at(k), (shears.usable >> k) & 1u);
-                }
-                made |= active;
-#if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
-                // Two rays at a time in one register while two are left (test_block_pair).
-                for (unsigned rest = active; rest & (rest - 1);) {
-                    const int k = detail::lowest_bit(rest);
-                    rest &= rest - 1;
-                    const int j = detail::lowest_bit(rest);
-                    rest &= rest - 1;
-                    if (!tri[k].ready() || !tri[j].ready()) continue; // no hit for either (single: the same)
-                    active &= ~(1u << k | 1u << j);
-                    const auto& block = blocks_[leaf];
-                    detail::LaneHits<float> hk, hj;
-                    const unsigned both = detail::test_block_pair<culls, visit == Visit::nearest>(
-                        block, tri[k], tri[j], t_far[k], t_far[j], hk, hj);
-                    const unsigned lk = skip_lanes(block, both & 0xffu, filter.skip),
-                                   lj = skip_lanes(block, both >> 8, filter.skip);
-                    if constexpr (visit == Visit::nearest) {
-                        const auto keep_block = [&block](const detail::LaneHits<float>& h, unsigned l) {
-                            return [&block, &h, l](Hit<float>& best, float& t) { keep_nearest(block, l, h, t, best); };
-                        };
-                        if (lk) nearest.keep(k, t_far[k], keep_block(hk, lk));
-                        if (lj) nearest.keep(j, t_far[j], keep_block(hj, lj));
-                    } else {
-                        done |= (lk ? 1u << k : 0u) | (lj ? 1u << j : 0u);
-                    }
-                }
-#endif
-                for (; active; active &= active - 1) {
-                    const int k = detail::lowest_bit(active);
-                    if constexpr (visit == Visit::nearest) {
-                        nearest.keep(k, t_far[k], [&](Hit<float>& best, float& t) {
-                            take_nearest<culls>(leaf, tri[k], t, best, filter.skip);
-                        });
-                    } else {
-                        detail::LaneHits<float> unused;
-                        if (filter.skip ? lanes_hit<culls>(leaf, tri[k], t_far[k], unused, filter.skip) != 0
-                                        : tri[k].ready() && detail::test_block<culls, false>(blocks_[leaf], tri[k],
-                                                                                             t_far[k], unused) != 0)
-                            done |= 1u << k;
-                    }
-                }
-                return done;
-            });
-        };
-        with_cull(filter, walk);
-        if constexpr (visit == Visit::nearest)
-            for (unsigned l = lanes; l; l &= l - 1) {
-                const int k = detail::lowest_bit(l);
-                hits[first + std::size_t(k)] = nearest.at(k);
-            }
-        if constexpr (visit == Visit::any)
-            for (unsigned l = lanes; l; l &= l - 1) {
-                const int k = detail::lowest_bit(l);
-                blocked[first + std::size_t(k)] = (p.lanes >> k) & 1u ? 0 : 1; // left the packet: blocked
-            }
+        const unsigned lanes = detail::make_packet(s.p, s.c, n, limit, tree_.bound(), tree_.leaf_scale());
+        if (lanes && visit == Visit::nearest)
+            for (int k = 0; k < size; ++k) s.nearest.set(k, Hit<float>{}); // no hit
         return lanes;
+    }
+
+    // Whether packets a and b (both made) may share one walk (walk_packets), and then `box`, the
+    // bounds of both: their rays point into one octant, their first rays' directions lie within
+    // packet_cone_cos of each other and their origins within packet_origin_spread leaf sizes
+    // along each axis, as make_packet asks of one packet's rays.
+    bool packets_share(const PacketTrace& a, const PacketTrace& b, detail::PacketBounds& box) const noexcept {
+        bool negative[3];
+        for (int axis = 0; axis < 3; ++axis) {
+            if (a.p.near_plane[axis] != b.p.near_plane[axis]) return false;
+            negative[axis] = !detail::packet_positive(a.p, axis);
+        }
+        const int i = detail::lowest_bit(a.p.lanes), j = detail::lowest_bit(b.p.lanes);
+        float dd_a = 0.0f, dd_b = 0.0f, d_ab = 0.0f;
+        for (int axis = 3; axis < 6; ++axis)
+            dd_a += a.c[axis][i] * a.c[axis][i], dd_b += b.c[axis][j] * b.c[axis][j],
+                d_ab += a.c[axis][i] * b.c[axis][j];
+        if (!(d_ab >= detail::packet_cone_cos * std::sqrt(dd_a * dd_b))) return false;
+        float lo[6], hi[6];
+        for (int k = 0; k < 6; ++k) lo[k] = std::min(a.p.lo[k], b.p.lo[k]), hi[k] = std::max(a.p.hi[k], b.p.hi[k]);
+        for (int axis = 0; axis < 3; ++axis)
+            if (!(hi[axis] - lo[axis] <= detail::packet_origin_spread * tree_.leaf_scale())) return false;
+        detail::set_packet_bounds(box, lo, hi, negative, tree_.bound());
+        return true;
+    }
+
+    // The packet's results into the caller's arrays: the nearest hits, or whether each ray is
+    // blocked (it left the packet).
+    template <Visit visit>
+    static void finish_packet(const PacketTrace& s, unsigned lanes, std::size_t first, Hit<float>* hits,
+                              std::uint8_t* blocked) noexcept {
+        for (; lanes; lanes &= lanes - 1) {
+            const int k = detail::lowest_bit(lanes);
+            if constexpr (visit == Visit::nearest)
+                hits[first + std::size_t(k)] = s.nearest.at(k);
+            else
+                blocked[first + std::size_t(k)] = (s.p.lanes >> k) & 1u ? 0 : 1;
+        }
+    }
+
+    // The leaf test of packet `s`'s walk (walk_packets): the rays `active` against leaf `leaf`,
+    // in lanes where they can be (rays_in_lanes), else two or one at a time.
+    template <Visit visit, bool culls>
+    auto packet_leaf(PacketTrace& s, const HitFilter& filter) const noexcept {
+        return [this, &s, &filter](std::uint32_t leaf, unsigned active) {
+            detail::TriangleRay<float>* const tri = s.tri.lane;
+            const auto& c = s.c;
+            float(&t_far)[16] = s.p.t_far;
+            if (!s.shears_made) detail::set_shears(c[3], c[4], c[5], s.shears), s.shears_made = true;
+            unsigned done = 0;
+#if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
+            active =
+                rays_in_lanes<culls, visit>(blocks_[leaf], s.p, s.shears, active, t_far, s.nearest, filter.skip, done);
+#endif
+            for (unsigned fresh = active & ~s.made; fresh; fresh &= fresh - 1) {
+                const int k = detail::lowest_bit(fresh);
+                new (tri + k)
+                    detail::TriangleRay<float>(Ray<float>{{c[0][k], c[1][k], c[2][k]}, {c[3][k], c[4][k], c[5][k]}},
+                                               s.shears.at(k), (s.shears.usable >> k) & 1u);
+            }
+            s.made |= active;
+#if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
+            // Two rays at a time in one register while two are left (test_block_pair).
+            for (unsigned rest = active; rest & (rest - 1);) {
+                const int k = detail::lowest_bit(rest);
+                rest &= rest - 1;
+                const int j = detail::lowest_bit(rest);
+                rest &= rest - 1;
+                if (!tri[k].ready() || !tri[j].ready()) continue; // no hit for either (single: the same)
+                active &= ~(1u << k | 1u << j);
+                const auto& block = blocks_[leaf];
+                detail::LaneHits<float> hk, hj;
+                const unsigned both = detail::test_block_pair<culls, visit == Visit::nearest>(
+                    block, tri[k], tri[j], t_far[k], t_far[j], hk, hj);
+                const unsigned lk = skip_lanes(block, both & 0xffu, filter.skip),
+                               lj = skip_lanes(block, both >> 8, filter.skip);
+                if constexpr (visit == Visit::nearest) {
+                    const auto keep_block = [&block](const detail::LaneHits<float>& h, unsigned l) {
+                        return [&block, &h, l](Hit<float>& best, float& t) { keep_nearest(block, l, h, t, best); };
+                    };
+                    if (lk) s.nearest.keep(k, t_far[k], keep_block(hk, lk));
+                    if (lj) s.nearest.keep(j, t_far[j], keep_block(hj, lj));
+                } else {
+                    done |= (lk ? 1u << k : 0u) | (lj ? 1u << j : 0u);
+                }
+            }
+#endif
+            for (; active; active &= active - 1) {
+                const int k = detail::lowest_bit(active);
+                if constexpr (visit == Visit::nearest) {
+                    s.nearest.keep(k, t_far[k], [&](Hit<float>& best, float& t) {
+                        take_nearest<culls>(leaf, tri[k], t, best, filter.skip);
+                    });
+                } else {
+                    detail::LaneHits<float> unused;
+                    if (filter.skip ? lanes_hit<culls>(leaf, tri[k], t_far[k], unused, filter.skip) != 0
+                                    : tri[k].ready() && detail::test_block<culls, false>(blocks_[leaf], tri[k],
+                                                                                         t_far[k], unused) != 0)
+                        done |= 1u << k;
+                }
+            }
+            return done;
+        };
+    }
+
+    // The packet part of stream() (float) for two consecutive chunks of up to 16 rays (chunk i:
+    // rays [first[i], first[i] + n[i]), n[1] may be 0): each chunk's rays make_packet takes into
+    // packed[i], and wide[i] when it took none because their origins lay too far apart
+    // (RayPacket::wide). Two packets that packets_share says may go together are traced by one
+    // walk (walk_packets), as 32 rays under one interval test: camera rays of two adjacent 4×4
+    // tiles, or shadow rays from them towards one light.
+    template <Visit visit, class Rays>
+    ISIN_DETAIL_NOINLINE void trace_packets(const Rays& rays, const std::size_t (&first)[2], const int (&n)[2],
+                                            const float* t_max, Hit<float>* hits, std::uint8_t* blocked,
+                                            const HitFilter& filter, unsigned (&packed)[2],
+                                            bool (&wide)[2]) const noexcept {
+        PacketTrace s[2];
+        for (int i = 0; i < 2; ++i) {
+            packed[i] = n[i] > 1 ? start_packet<visit>(s[i], rays, first[i], n[i], t_max) : 0u;
+            wide[i] = n[i] > 1 && !packed[i] && s[i].p.wide;
+        }
+        if (!packed[0] && !packed[1]) return;
+        with_cull(filter, [&](auto cull) {
+            constexpr bool culls = decltype(cull)::value;
+            auto leaf_a = packet_leaf<visit, culls>(s[0], filter);
+            auto leaf_b = packet_leaf<visit, culls>(s[1], filter);
+            detail::PacketBounds box;
+            if (packed[0] && packed[1] && packets_share(s[0], s[1], box)) {
+                detail::RayPacket* const ps[2] = {&s[0].p, &s[1].p};
+                detail::walk_packets<visit>(tree_, ps, box, [&](std::uint32_t leaf, unsigned active) {
+                    unsigned done = 0;
+                    if (active & 0xffffu) done = leaf_a(leaf, active & 0xffffu);
+                    if (active >> 16) done |= leaf_b(leaf, active >> 16) << 16;
+                    return done;
+                });
+                return;
+            }
+            if (packed[0]) detail::walk_packet<visit>(tree_, s[0].p, leaf_a);
+            if (packed[1]) detail::walk_packet<visit>(tree_, s[1].p, leaf_b);
+        });
+        for (int i = 0; i < 2; ++i)
+            if (packed[i]) finish_packet<visit>(s[i], packed[i], first[i], hits, blocked);
     }
 
 #if defined(ISIN_DETAIL_TRIANGLE_PAIRS)
@@ -641,7 +706,9 @@ private:
         if (t_max) detail::prefetch(t_max + first), detail::prefetch(t_max + last);
     }
 
-    // Rays: const Ray<T>* or RaysSoA<T> (ray i is rays[i]).
+    // Rays: const Ray<T>* or RaysSoA<T> (ray i is rays[i]), 16 at a time (a chunk); where
+    // there are packets, two chunks at a time try to form one each (trace_packets), and the rays
+    // no packet takes go two at a time (trace_unpacked).
     template <Visit visit, class Rays>
     void stream(const Rays& rays, std::size_t count, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
                 const HitFilter& filter) const noexcept {
@@ -653,16 +720,40 @@ private:
         // packets (measured, shadow rays of the trefoil: 14-23% slower when such chunks too made
         // the next ones wait).
         int wait = 0, backoff = 3;
-        for (std::size_t first = 0; first < count; first += 16) {
+        const auto chunk_size = [count](std::size_t first) {
+            return first < count ? int(std::min<std::size_t>(16, count - first)) : 0;
+        };
+        for (std::size_t first = 0; first < count;) {
             if (first + prefetch_ahead < count) prefetch_chunk(rays, first + prefetch_ahead, count, t_max);
-            const bool coherent = trace_chunk<visit>(rays, first, int(std::min<std::size_t>(16, count - first)), t_max,
-                                                     hits, blocked, filter, wait == 0);
-            if (coherent)
-                wait = 0, backoff = 3;
-            else if (wait > 0)
-                --wait;
-            else
-                wait = backoff, backoff = std::min(2 * backoff + 1, 63);
+            const int n = chunk_size(first);
+#if defined(ISIN_DETAIL_PACKETS)
+            if constexpr (std::is_same_v<T, float>) {
+                if (wait == 0 && !tree_.empty()) {
+                    const std::size_t second = first + std::size_t(n);
+                    if (second + prefetch_ahead < count) prefetch_chunk(rays, second + prefetch_ahead, count, t_max);
+                    const std::size_t firsts[2] = {first, second};
+                    const int sizes[2] = {n, chunk_size(second)};
+                    unsigned packed[2];
+                    bool wide[2];
+                    trace_packets<visit>(rays, firsts, sizes, t_max, hits, blocked, filter, packed, wide);
+                    for (int i = 0; i < 2 && sizes[i] > 0; ++i) {
+                        trace_unpacked<visit>(rays, firsts[i], sizes[i], ((1u << sizes[i]) - 1u) & ~packed[i], t_max,
+                                              hits, blocked, filter);
+                        if (packed[i] || wide[i]) // coherent
+                            wait = 0, backoff = 3;
+                        else
+                            wait = backoff, backoff = std::min(2 * backoff + 1, 63);
+                    }
+                    first = second + std::size_t(sizes[1]);
+                    continue;
+                }
+            }
+#else
+            (void)backoff;
+#endif
+            trace_unpacked<visit>(rays, first, n, (1u << n) - 1u, t_max, hits, blocked, filter);
+            if (wait > 0) --wait;
+            first += std::size_t(n);
         }
     }
 
