@@ -725,35 +725,34 @@ private:
         };
         for (std::size_t first = 0; first < count;) {
             if (first + prefetch_ahead < count) prefetch_chunk(rays, first + prefetch_ahead, count, t_max);
-            const int n = chunk_size(first);
+            // One chunk, or two that try packets.
+            std::size_t firsts[2] = {first, first + std::size_t(chunk_size(first))};
+            int sizes[2] = {chunk_size(first), 0};
+            unsigned packed[2] = {0, 0};
+            bool wide[2] = {false, false}, tried = false;
 #if defined(ISIN_DETAIL_PACKETS)
             if constexpr (std::is_same_v<T, float>) {
                 if (wait == 0 && !tree_.empty()) {
-                    const std::size_t second = first + std::size_t(n);
-                    if (second + prefetch_ahead < count) prefetch_chunk(rays, second + prefetch_ahead, count, t_max);
-                    const std::size_t firsts[2] = {first, second};
-                    const int sizes[2] = {n, chunk_size(second)};
-                    unsigned packed[2];
-                    bool wide[2];
+                    if (firsts[1] + prefetch_ahead < count)
+                        prefetch_chunk(rays, firsts[1] + prefetch_ahead, count, t_max);
+                    sizes[1] = chunk_size(firsts[1]);
                     trace_packets<visit>(rays, firsts, sizes, t_max, hits, blocked, filter, packed, wide);
-                    for (int i = 0; i < 2 && sizes[i] > 0; ++i) {
-                        trace_unpacked<visit>(rays, firsts[i], sizes[i], ((1u << sizes[i]) - 1u) & ~packed[i], t_max,
-                                              hits, blocked, filter);
-                        if (packed[i] || wide[i]) // coherent
-                            wait = 0, backoff = 3;
-                        else
-                            wait = backoff, backoff = std::min(2 * backoff + 1, 63);
-                    }
-                    first = second + std::size_t(sizes[1]);
-                    continue;
+                    tried = true;
                 }
             }
-#else
-            (void)backoff;
 #endif
-            trace_unpacked<visit>(rays, first, n, (1u << n) - 1u, t_max, hits, blocked, filter);
-            if (wait > 0) --wait;
-            first += std::size_t(n);
+            for (int i = 0; i < 2 && sizes[i] > 0; ++i) {
+                trace_unpacked<visit>(rays, firsts[i], sizes[i], ((1u << sizes[i]) - 1u) & ~packed[i], t_max, hits,
+                                      blocked, filter);
+                if (!tried) {
+                    if (wait > 0) --wait;
+                } else if (packed[i] || wide[i]) { // coherent
+                    wait = 0, backoff = 3;
+                } else {
+                    wait = backoff, backoff = std::min(2 * backoff + 1, 63);
+                }
+            }
+            first = firsts[1] + std::size_t(sizes[1]);
         }
     }
 
