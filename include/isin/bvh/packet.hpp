@@ -368,6 +368,15 @@ inline void packet_ranges(RayPacket& p, const float (&c)[6][RayPacket::size], un
 #endif
 }
 
+/// Whether origins whose coordinates lie in [lo, hi] (lo[0-2], hi[0-2], as PacketBounds::lo,
+/// hi) are close enough for one packet: within packet_origin_spread leaf sizes (`leaf_scale`)
+/// along each axis (false for NaN, an overflowed range).
+inline bool origins_close(const float (&lo)[6], const float (&hi)[6], float leaf_scale) noexcept {
+    for (int a = 0; a < 3; ++a)
+        if (!(hi[a] - lo[a] <= packet_origin_spread * leaf_scale)) return false;
+    return true;
+}
+
 /// The interval test's terms of rays whose origins' coordinates and inverse directions'
 /// components lie in [lo, hi] (as PacketBounds::lo, hi), all in the octant `negative` gives
 /// (per axis, whether their directions point towards −axis), in a tree of bound `bound`.
@@ -433,11 +442,10 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
     // Lanes outside the packet: never entered (t_far < 0), and out of the intervals.
     float lo[6], hi[6];
     packet_ranges(p, c, lanes, lo, hi);
-    for (int a = 0; a < 3; ++a)
-        if (!(hi[a] - lo[a] <= packet_origin_spread * leaf_scale)) { // a wide beam (or an overflow)
-            p.wide = true;
-            return 0;
-        }
+    if (!origins_close(lo, hi, leaf_scale)) { // a wide beam (or an overflow)
+        p.wide = true;
+        return 0;
+    }
     p.lanes = lanes;
     bool negative[3];
     for (int a = 0; a < 3; ++a) negative[a] = (octant[a] >> first) & 1u;

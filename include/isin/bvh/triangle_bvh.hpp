@@ -458,8 +458,7 @@ private:
         if (!(d_ab >= detail::packet_cone_cos * std::sqrt(dd_a * dd_b))) return false;
         float lo[6], hi[6];
         for (int k = 0; k < 6; ++k) lo[k] = std::min(a.p.lo[k], b.p.lo[k]), hi[k] = std::max(a.p.hi[k], b.p.hi[k]);
-        for (int axis = 0; axis < 3; ++axis)
-            if (!(hi[axis] - lo[axis] <= detail::packet_origin_spread * tree_.leaf_scale())) return false;
+        if (!detail::origins_close(lo, hi, tree_.leaf_scale())) return false;
         detail::set_packet_bounds(box, lo, hi, negative, tree_.bound());
         return true;
     }
@@ -729,8 +728,9 @@ private:
         for (std::size_t first = 0; first < count;) {
             if (first + prefetch_ahead < count) prefetch_chunk(rays, first + prefetch_ahead, count, t_max);
             // One chunk, or two that try packets.
-            std::size_t firsts[2] = {first, first + std::size_t(chunk_size(first))};
-            int sizes[2] = {chunk_size(first), 0};
+            const int n = chunk_size(first);
+            std::size_t firsts[2] = {first, first + std::size_t(n)};
+            int sizes[2] = {n, 0};
             unsigned packed[2] = {0, 0};
             bool wide[2] = {false, false}, tried = false;
 #if defined(ISIN_DETAIL_PACKETS)
