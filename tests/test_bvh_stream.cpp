@@ -25,7 +25,8 @@ bool same_bits(T a, T b) {
 
 template <class T>
 bool same_hit(const isin::Hit<T>& a, const isin::Hit<T>& b) {
-    return same_bits(a.t, b.t) && same_bits(a.u, b.u) && same_bits(a.v, b.v) && a.primitive == b.primitive;
+    return same_bits(a.t, b.t) && same_bits(a.u, b.u) && same_bits(a.v, b.v) && a.primitive == b.primitive &&
+           a.geometry == b.geometry;
 }
 
 #if defined(ISIN_DETAIL_TRIANGLE_PAIRS) // the helpers of the AVX-512 leaf tests' tests
@@ -57,7 +58,9 @@ template <class T>
 int stream_mismatches(const isin::Bvh<T>& bvh, const std::vector<isin::Ray<T>>& rays, const std::vector<T>& limit,
                       const isin::HitFilter& filter = {}) {
     const std::size_t n = rays.size();
-    std::vector<isin::Hit<T>> hits(n), hits_soa(n), bounded(n);
+    // Stale values in every field: the stream calls must write each one.
+    const isin::Hit<T> stale{T(1), T(2), T(3), 4u, 5u};
+    std::vector<isin::Hit<T>> hits(n, stale), hits_soa(n, stale), bounded(n, stale);
     std::vector<std::uint8_t> blocked(n, 7), blocked_soa(n, 7);
     bvh.intersect(rays.data(), n, hits.data(), filter);
     bvh.intersect(rays.data(), n, limit.data(), bounded.data(), filter);

@@ -464,10 +464,28 @@ private:
     }
 
     // The packet's results into the caller's arrays: the nearest hits, or whether each ray is
-    // blocked (it left the packet).
+    // blocked (it left the packet). A whole packet's hits go by four 4×4 transposes (t, u, v
+    // and primitive of a hit in one 128-bit store) rather than field by field: camera-ray
+    // streams 1.02× as fast, median of 24 A/Bs on four meshes (0.97-1.07; stop 39, same process,
+    // medians of 11-15). Five 512-bit stores of the five fields (a permute each) ran 0.84-0.90×.
     template <Visit visit>
     static void finish_packet(const PacketTrace& s, unsigned lanes, std::size_t first, Hit<float>* hits,
                               std::uint8_t* blocked) noexcept {
+#if defined(__AVX512F__)
+        if constexpr (visit == Visit::nearest) {
+            if (lanes == 0xffffu) { // the 16 hits' t, u, v and primitive in 16 stores (store_quads)
+                static_assert(sizeof(Hit<float>) == 5 * sizeof(float) && std::is_standard_layout_v<Hit<float>>,
+                              "Hit<float> is t, u, v, primitive, geometry");
+                const __m512 fields[4] = {_mm512_load_ps(s.nearest.t), _mm512_load_ps(s.nearest.u),
+                                          _mm512_load_ps(s.nearest.v),
+                                          _mm512_castsi512_ps(_mm512_load_si512(s.nearest.primitive))};
+                Hit<float>* const out = hits + first;
+                detail::store_quads(fields, [out](int k) { return &out[k].t; });
+                for (int k = 0; k < 16; ++k) out[k].geometry = Hit<float>::none;
+                return;
+            }
+        }
+#endif
         for (; lanes; lanes &= lanes - 1) {
             const int k = detail::lowest_bit(lanes);
             if constexpr (visit == Visit::nearest)

@@ -1,7 +1,7 @@
 #pragma once
 /// isin — private: the AVX-512 operations whose plain intrinsics GCC 12 warns about, spelled
 /// with full masks (the maskz forms): its _mm512_max_ps (and _pd), _mm512_min_ps, _mm512_sqrt_ps
-/// (and _pd), _mm512_broadcast_f32x8
+/// (and _pd), _mm512_broadcast_f32x8, _mm512_unpacklo/hi_ps (and _pd), _mm512_extractf32x4_ps
 /// and the 256-bit halves of a register pass an uninitialised operand of their own
 /// (-Wuninitialized, -Wmaybe-uninitialized). Same instructions.
 #if defined(__AVX512F__)
@@ -15,6 +15,28 @@ inline __m512 min16(__m512 a, __m512 b) noexcept { return _mm512_maskz_min_ps(0x
 inline __m512d max8(__m512d a, __m512d b) noexcept { return _mm512_maskz_max_pd(0xff, a, b); }
 inline __m512 sqrt16(__m512 a) noexcept { return _mm512_maskz_sqrt_ps(0xffff, a); }
 inline __m512d sqrt8(__m512d a) noexcept { return _mm512_maskz_sqrt_pd(0xff, a); }
+inline __m512 unpacklo16(__m512 a, __m512 b) noexcept { return _mm512_maskz_unpacklo_ps(0xffff, a, b); }
+inline __m512 unpackhi16(__m512 a, __m512 b) noexcept { return _mm512_maskz_unpackhi_ps(0xffff, a, b); }
+inline __m512d unpacklo8(__m512d a, __m512d b) noexcept { return _mm512_maskz_unpacklo_pd(0xff, a, b); }
+inline __m512d unpackhi8(__m512d a, __m512d b) noexcept { return _mm512_maskz_unpackhi_pd(0xff, a, b); }
+
+/// Four fields of 16 records at once: record k's fields 0-3 (a[0-3] lane k) are stored as four
+/// floats at `at(k)`, unaligned. A 4×4 transpose in each 128-bit block (two unpacks, then two
+/// more), then one 128-bit store per record.
+template <class At>
+inline void store_quads(const __m512 (&a)[4], const At& at) noexcept {
+    const __m512d lo01 = _mm512_castps_pd(unpacklo16(a[0], a[1])), hi01 = _mm512_castps_pd(unpackhi16(a[0], a[1])),
+                  lo23 = _mm512_castps_pd(unpacklo16(a[2], a[3])), hi23 = _mm512_castps_pd(unpackhi16(a[2], a[3]));
+    // r[i], 128-bit block j: record 4j + i
+    const __m512 r[4] = {_mm512_castpd_ps(unpacklo8(lo01, lo23)), _mm512_castpd_ps(unpackhi8(lo01, lo23)),
+                         _mm512_castpd_ps(unpacklo8(hi01, hi23)), _mm512_castpd_ps(unpackhi8(hi01, hi23))};
+    for (int i = 0; i < 4; ++i) {
+        _mm_storeu_ps(at(i), _mm512_maskz_extractf32x4_ps(0xf, r[i], 0));
+        _mm_storeu_ps(at(4 + i), _mm512_maskz_extractf32x4_ps(0xf, r[i], 1));
+        _mm_storeu_ps(at(8 + i), _mm512_maskz_extractf32x4_ps(0xf, r[i], 2));
+        _mm_storeu_ps(at(12 + i), _mm512_maskz_extractf32x4_ps(0xf, r[i], 3));
+    }
+}
 
 #if defined(__AVX512DQ__)
 /// The 8 floats at `p` (32-byte aligned) in both halves of a register.
