@@ -31,7 +31,7 @@
 // edges its count differs from isin's, the robust one should not.
 //
 // Run: build/…/benchmarks/vs_embree [--mesh NAME] [--repeats N] [--threads-list 1,2]
-//      [--width W --height H] [--csv FILE]            (built with -march=native)
+//      [--width W --height H] [--csv FILE] [--stream-csv FILE]   (built with -march=native)
 #include <embree3/rtcore.h>
 
 #include "embree_scene.hpp"
@@ -75,6 +75,7 @@ struct Options {
     std::vector<int> threads = {1, 2};
     int width = 1920, height = 1080;
     std::string csv;
+    std::string stream_csv;                              // the stream table's rows (PacketBench), appended
     std::vector<std::string> studies = studies::names(); // after the meshes (embree_studies.hpp)
     bool build_only = false;                             // child mode: time the builds of one mesh with `build_threads`
     int build_threads = 1;
@@ -443,8 +444,9 @@ struct PacketBench {
         });
     }
 
-    // One table row per thread count; false when a count or sum disagrees.
-    bool run(const std::string& name, const Options& opt, std::string& out) const {
+    // One table row per thread count (and one CSV row, when `csv`); false when a count or sum
+    // disagrees.
+    bool run(const std::string& name, const Options& opt, std::string& out, std::FILE* csv) const {
         bool ok = true;
         for (const int threads : opt.threads) {
             enum {
@@ -504,6 +506,14 @@ struct PacketBench {
                     mrays[shadow_single], mrays[shadow_e8], mrays[shadow_e16], mrays[shadow_stream] / mrays[shadow_e16],
                     mrays[diffuse_stream], mrays[diffuse_single], mrays[diffuse_e1], mrays[diffuse_e16],
                     mrays[diffuse_stream] / mrays[diffuse_e1]);
+            if (csv) {
+                std::fprintf(csv, "%s,%d", name.c_str(), threads);
+                for (int m = 0; m < measures; ++m) std::fprintf(csv, ",%.4f", mrays[m]);
+                std::fprintf(csv, ",%.4f,%.4f,%.4f,%d,%d,%d\n", mrays[primary_stream] / mrays[primary_e16],
+                             mrays[shadow_stream] / mrays[shadow_e16], mrays[diffuse_stream] / mrays[diffuse_e1],
+                             opt.repeats, opt.width / 4 * 4, opt.height / 4 * 4);
+                std::fflush(csv);
+            }
             // The stream equals isin's single rays exactly; Embree agrees to the tolerance.
             const auto same = [](const Totals& a, const Totals& b) { return a.hits == b.hits && a.sum_t == b.sum_t; };
             const auto close = [](const Totals& a, const Totals& b) {
@@ -635,7 +645,7 @@ void usage(FILE* f) {
     std::fprintf(
         f,
         "usage: vs_embree [--mesh NAME|none] [--repeats N] [--threads-list 1,2] [--width W] [--height H] [--csv FILE]\n"
-        "                 [--studies all|none|spheres,instances,transparency,refit,groups,memory]\n"
+        "                 [--stream-csv FILE] [--studies all|none|spheres,instances,transparency,refit,groups,memory]\n"
         "isin's Bvh<float> against Embree %d.%d.%d (RTC_BUILD_QUALITY_MEDIUM) on the same triangles and rays:\n"
         "build times (each thread count in a fresh child process), primary rays of the note's camera\n"
         "(isin intersect, rtcIntersect1, rtcIntersect16 on 4x4 tiles) and shadow rays (occluded,\n"
@@ -643,7 +653,9 @@ void usage(FILE* f) {
         RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH);
     for (const auto& m : meshes::names()) std::fprintf(f, " %s", m.c_str());
     std::fprintf(f,
-                 "\n--csv appends one row per mesh and thread count. Then the scene studies of\n"
+                 "\n--csv appends one row per mesh and thread count of the first table, --stream-csv one of the\n"
+                 "stream table (Mrays/s and the three ratios; scripts/streams.sh takes medians over runs). Then the "
+                 "scene studies of\n"
                  "benchmarks/embree_studies.hpp (at half the width and height): spheres against Embree's points and\n"
                  "user geometry, instances, transparent shadows, refit, a mesh in 20 groups, memory. Exit status 1\n"
                  "when the libraries' hit counts or sums of t differ by more than 1e-5 (relative).\n");
@@ -662,6 +674,20 @@ int run(const Options& opt) {
             std::fprintf(csv, "mesh,triangles,threads,build_isin_ms,build_embree_ms,isin_mrays,embree1_mrays,"
                               "embree16_mrays,isin_over_embree1,shadow_isin_mrays,shadow_embree1_mrays,"
                               "shadow_isin_over_embree1,width,height\n");
+    }
+    std::FILE* stream_csv = nullptr;
+    if (!opt.stream_csv.empty()) {
+        stream_csv = std::fopen(opt.stream_csv.c_str(), "a");
+        if (!stream_csv) {
+            std::fprintf(stderr, "cannot open %s\n", opt.stream_csv.c_str());
+            if (csv) std::fclose(csv);
+            return 2;
+        }
+        if (std::ftell(stream_csv) == 0)
+            std::fprintf(stream_csv, "mesh,threads,primary_stream,primary_isin1,primary_e8,primary_e16,shadow_stream,"
+                                     "shadow_isin1,shadow_e8,shadow_e16,diffuse_stream,diffuse_isin1,diffuse_e1,"
+                                     "diffuse_e16,primary_over_e16,shadow_over_e16,diffuse_over_e1,repeats,width,"
+                                     "height\n");
     }
     std::printf("isin Bvh<float> vs Embree %d.%d.%d (MEDIUM), %dx%d primary rays, light (200,300,-100), "
                 "median of %d, %u hardware threads, FTZ/DAZ on in every tracing thread, -march=native\n",
@@ -762,7 +788,7 @@ int run(const Options& opt) {
                     embree_sah.node_visits, embree_sah.leaf_visits, embree_sah.primitive_tests);
         std::printf(" mesh %.2f s, setup %.2f s\n", gen_s, setup_s);
         std::fflush(stdout);
-        all_ok = PacketBench(opt, bvh, scene, tris).run(name, opt, packet_table) && all_ok;
+        all_ok = PacketBench(opt, bvh, scene, tris).run(name, opt, packet_table, stream_csv) && all_ok;
         rtcReleaseScene(scene);
     }
     std::fputs(packet_table.c_str(), stdout);
@@ -771,6 +797,7 @@ int run(const Options& opt) {
     all_ok = studies::run(device, cfg, opt.studies) && all_ok;
     rtcReleaseDevice(device);
     if (csv) std::fclose(csv);
+    if (stream_csv) std::fclose(stream_csv);
     std::printf("%s\n", all_ok ? "all checks OK" : "MISMATCH between isin and Embree (see above)");
     return all_ok ? 0 : 1;
 }
@@ -819,6 +846,8 @@ int main(int argc, char** argv) {
                 opt.height = std::atoi(value());
             else if (a == "--csv")
                 opt.csv = value();
+            else if (a == "--stream-csv")
+                opt.stream_csv = value();
             else if (a == "--build-only")
                 opt.build_only = true;
             else if (a == "--threads")
