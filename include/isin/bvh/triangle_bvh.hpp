@@ -466,7 +466,7 @@ private:
     // The packet's results into the caller's arrays: the nearest hits, or whether each ray is
     // blocked (it left the packet). A whole packet's hits go by four 4×4 transposes (t, u, v
     // and primitive of a hit in one 128-bit store) rather than field by field: camera-ray
-    // streams 1.02× as fast, median of 24 A/Bs on four meshes (0.97-1.07; stop 39, same process,
+    // streams 1.02× as fast, median of 24 A/Bs on the five meshes (0.97-1.07; stop 39, same process,
     // medians of 11-15). Five 512-bit stores of the five fields (a permute each) ran 0.84-0.90×.
     template <Visit visit>
     static void finish_packet(const PacketTrace& s, unsigned lanes, std::size_t first, Hit<float>* hits,
