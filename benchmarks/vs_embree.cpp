@@ -498,20 +498,22 @@ struct PacketBench {
                                                                 : diffuse.size());
                 mrays[m] = rays / median(sec[m]) * 1e-6;
             }
+            // The goals' ratios: camera and shadow streams ÷ Embree's 16-ray packets, diffuse ÷ rtcIntersect1.
+            const double ratio[3] = {mrays[primary_stream] / mrays[primary_e16],
+                                     mrays[shadow_stream] / mrays[shadow_e16],
+                                     mrays[diffuse_stream] / mrays[diffuse_e1]};
             appendf(out,
                     "%-15s %3d | %6.2f %6.2f %6.2f %6.2f %6.2f | %6.2f %6.2f %6.2f %6.2f %6.2f | %6.2f %6.2f %6.2f "
                     "%6.2f %6.2f\n",
                     name.c_str(), threads, mrays[primary_stream], mrays[primary_single], mrays[primary_e8],
-                    mrays[primary_e16], mrays[primary_stream] / mrays[primary_e16], mrays[shadow_stream],
-                    mrays[shadow_single], mrays[shadow_e8], mrays[shadow_e16], mrays[shadow_stream] / mrays[shadow_e16],
-                    mrays[diffuse_stream], mrays[diffuse_single], mrays[diffuse_e1], mrays[diffuse_e16],
-                    mrays[diffuse_stream] / mrays[diffuse_e1]);
+                    mrays[primary_e16], ratio[0], mrays[shadow_stream], mrays[shadow_single], mrays[shadow_e8],
+                    mrays[shadow_e16], ratio[1], mrays[diffuse_stream], mrays[diffuse_single], mrays[diffuse_e1],
+                    mrays[diffuse_e16], ratio[2]);
             if (csv) {
                 std::fprintf(csv, "%s,%d", name.c_str(), threads);
                 for (int m = 0; m < measures; ++m) std::fprintf(csv, ",%.4f", mrays[m]);
-                std::fprintf(csv, ",%.4f,%.4f,%.4f,%d,%d,%d\n", mrays[primary_stream] / mrays[primary_e16],
-                             mrays[shadow_stream] / mrays[shadow_e16], mrays[diffuse_stream] / mrays[diffuse_e1],
-                             opt.repeats, opt.width / 4 * 4, opt.height / 4 * 4);
+                std::fprintf(csv, ",%.4f,%.4f,%.4f,%d,%d,%d\n", ratio[0], ratio[1], ratio[2], opt.repeats,
+                             opt.width / 4 * 4, opt.height / 4 * 4);
                 std::fflush(csv);
             }
             // The stream equals isin's single rays exactly; Embree agrees to the tolerance.
@@ -661,33 +663,32 @@ void usage(FILE* f) {
                  "when the libraries' hit counts or sums of t differ by more than 1e-5 (relative).\n");
 }
 
+// `path` opened for appending, `header` written first when the file is empty; nullptr for no
+// path, or (with a message) when it cannot be opened.
+std::FILE* open_csv(const std::string& path, const char* header) {
+    if (path.empty()) return nullptr;
+    std::FILE* f = std::fopen(path.c_str(), "a");
+    if (!f)
+        std::fprintf(stderr, "cannot open %s\n", path.c_str());
+    else if (std::ftell(f) == 0)
+        std::fputs(header, f);
+    return f;
+}
+
 int run(const Options& opt) {
     set_fp_mode();
-    std::FILE* csv = nullptr;
-    if (!opt.csv.empty()) {
-        csv = std::fopen(opt.csv.c_str(), "a");
-        if (!csv) {
-            std::fprintf(stderr, "cannot open %s\n", opt.csv.c_str());
-            return 2;
-        }
-        if (std::ftell(csv) == 0)
-            std::fprintf(csv, "mesh,triangles,threads,build_isin_ms,build_embree_ms,isin_mrays,embree1_mrays,"
-                              "embree16_mrays,isin_over_embree1,shadow_isin_mrays,shadow_embree1_mrays,"
-                              "shadow_isin_over_embree1,width,height\n");
-    }
-    std::FILE* stream_csv = nullptr;
-    if (!opt.stream_csv.empty()) {
-        stream_csv = std::fopen(opt.stream_csv.c_str(), "a");
-        if (!stream_csv) {
-            std::fprintf(stderr, "cannot open %s\n", opt.stream_csv.c_str());
-            if (csv) std::fclose(csv);
-            return 2;
-        }
-        if (std::ftell(stream_csv) == 0)
-            std::fprintf(stream_csv, "mesh,threads,primary_stream,primary_isin1,primary_e8,primary_e16,shadow_stream,"
-                                     "shadow_isin1,shadow_e8,shadow_e16,diffuse_stream,diffuse_isin1,diffuse_e1,"
-                                     "diffuse_e16,primary_over_e16,shadow_over_e16,diffuse_over_e1,repeats,width,"
-                                     "height\n");
+    // --csv and --stream-csv: appended, with the header line when the file is new.
+    std::FILE* csv = open_csv(opt.csv, "mesh,triangles,threads,build_isin_ms,build_embree_ms,isin_mrays,embree1_mrays,"
+                                       "embree16_mrays,isin_over_embree1,shadow_isin_mrays,shadow_embree1_mrays,"
+                                       "shadow_isin_over_embree1,width,height\n");
+    if (!opt.csv.empty() && !csv) return 2;
+    std::FILE* stream_csv = open_csv(
+        opt.stream_csv, "mesh,threads,primary_stream,primary_isin1,primary_e8,primary_e16,shadow_stream,"
+                        "shadow_isin1,shadow_e8,shadow_e16,diffuse_stream,diffuse_isin1,diffuse_e1,diffuse_e16,"
+                        "primary_over_e16,shadow_over_e16,diffuse_over_e1,repeats,width,height\n");
+    if (!opt.stream_csv.empty() && !stream_csv) {
+        if (csv) std::fclose(csv);
+        return 2;
     }
     std::printf("isin Bvh<float> vs Embree %d.%d.%d (MEDIUM), %dx%d primary rays, light (200,300,-100), "
                 "median of %d, %u hardware threads, FTZ/DAZ on in every tracing thread, -march=native\n",

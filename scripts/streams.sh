@@ -7,7 +7,8 @@
 # other tenants runs some processes 10-25% slower for a while, on one library more than on the
 # other, so one run's ratio can fall a long way from the others (README, "Many rays at once").
 # Usage: RUNS=5 scripts/streams.sh [vs_embree options, e.g. --threads-list 1 --repeats 7]
-# Writes the runs' rows to build/bench/streams.csv, their tables to build/bench/streams-run*.txt; exits non-zero if isin and Embree disagree.
+# Writes the runs' rows to build/bench/streams.csv and their tables to build/bench/streams-run*.txt;
+# exits non-zero if isin and Embree disagree.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 runs=${RUNS:-5}
@@ -37,7 +38,7 @@ awk -F, 'NR > 1 { for (c = 15; c <= 17; ++c) print $1, $2, c, $c }' "$csv" | sor
       if (!(key in seen)) { seen[key] = 1; order[++keys] = key }
       n = 0
     }
-    { if ($1 " " $2 != key || $3 != col) { flush(); key = $1 " " $2; col = $3 }; v[++n] = $4; runs = n }
+    { if ($1 " " $2 != key || $3 != col) { flush(); key = $1 " " $2; col = $3 }; v[++n] = $4 }
     END {
       flush()
       printf "%-15s %3s | %-22s | %-22s | %-22s\n", "mesh", "thr", "camera / E-16", "shadow / O-16", "diffuse / E-1"
