@@ -225,7 +225,7 @@ private:
     // The leaf test of a nearest-hit walk: the leaf's nearest hit into `best` (take_nearest).
     template <bool cull>
     auto nearest_leaf(detail::TriangleRay<T>& r, Hit<T>& best, const std::uint8_t* skip) const noexcept {
-        return [this, &r, &best, skip](std::uint32_t leaf, T& t_far) {
+        return [this, &r, &best, skip](std::uint32_t leaf, T& t_far) ISIN_DETAIL_LAMBDA_INLINE {
             take_nearest<cull>(leaf, r, t_far, best, skip);
             return false;
         };
@@ -233,7 +233,7 @@ private:
     // The leaf test of an any-hit walk without a skip mask: true (stop) when the leaf is hit.
     template <bool cull>
     auto any_leaf(detail::TriangleRay<T>& r) const noexcept {
-        return [this, &r](std::uint32_t leaf, T& t_far) {
+        return [this, &r](std::uint32_t leaf, T& t_far) ISIN_DETAIL_LAMBDA_INLINE {
             detail::LaneHits<T> unused;
             return r.ready() && detail::test_block<cull, false>(blocks_[leaf], r, t_far, unused) != 0;
         };
@@ -273,8 +273,8 @@ private:
     // way, and every triangle that ties with the hit must still be tested, whatever the order
     // the leaves come in, for the lowest index to win on every path (single rays and packets).
     template <bool cull>
-    void take_nearest(std::uint32_t leaf, detail::TriangleRay<T>& r, T& t_far, Hit<T>& best,
-                      const std::uint8_t* skip) const noexcept {
+    ISIN_DETAIL_INLINE void take_nearest(std::uint32_t leaf, detail::TriangleRay<T>& r, T& t_far, Hit<T>& best,
+                                         const std::uint8_t* skip) const noexcept {
         detail::LaneHits<T> hits;
         const unsigned lanes = lanes_hit<cull>(leaf, r, t_far, hits, skip);
         if (lanes) keep_nearest(blocks_[leaf], lanes, hits, t_far, best);

@@ -125,8 +125,8 @@ ISIN_DETAIL_COLD unsigned test_block_exact(const TriangleBlock<float>& b, const 
 // then det is not finite or an edge function is below 2^-126 in magnitude (exact zeros
 // included), and that lane is tested exactly (test_block_exact; D7: a vertex at 2e38).
 template <bool cull, bool store>
-inline unsigned test_block_avx2(const TriangleBlock<float>& b, const TriangleRay<float>& r, float t_max,
-                                LaneHits<float>& out) noexcept {
+ISIN_DETAIL_INLINE unsigned test_block_avx2(const TriangleBlock<float>& b, const TriangleRay<float>& r, float t_max,
+                                            LaneHits<float>& out) noexcept {
     const Sheared8 p(b, r);
     const KahanEdges8 e(p);
     const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
