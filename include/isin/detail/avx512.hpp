@@ -1,8 +1,8 @@
 #pragma once
 /// isin — private: the AVX-512 operations whose plain intrinsics GCC 12 warns about, spelled
 /// with full masks (the maskz forms): its _mm512_max_ps (and _pd), _mm512_min_ps, _mm512_sqrt_ps
-/// (and _pd), _mm512_broadcast_f32x8, _mm512_unpacklo/hi_ps (and _pd), _mm512_extractf32x4_ps
-/// and the 256-bit halves of a register pass an uninitialised operand of their own
+/// (and _pd), _mm512_broadcast_f32x8, _mm512_unpacklo/hi_ps (and _pd), _mm512_extractf32x4_ps,
+/// _mm512_permutexvar_ps and the 256-bit halves of a register pass an uninitialised operand of their own
 /// (-Wuninitialized, -Wmaybe-uninitialized). Same instructions.
 #if defined(__AVX512F__)
 #include <immintrin.h>
@@ -19,6 +19,8 @@ inline __m512 unpacklo16(__m512 a, __m512 b) noexcept { return _mm512_maskz_unpa
 inline __m512 unpackhi16(__m512 a, __m512 b) noexcept { return _mm512_maskz_unpackhi_ps(0xffff, a, b); }
 inline __m512d unpacklo8(__m512d a, __m512d b) noexcept { return _mm512_maskz_unpacklo_pd(0xff, a, b); }
 inline __m512d unpackhi8(__m512d a, __m512d b) noexcept { return _mm512_maskz_unpackhi_pd(0xff, a, b); }
+/// Lane k of the result is lane index[k] of a.
+inline __m512 permute16(__m512i index, __m512 a) noexcept { return _mm512_maskz_permutexvar_ps(0xffff, index, a); }
 
 /// Four fields of 16 records at once: record k's fields 0-3 (a[0-3] lane k) are stored as four
 /// floats at `at(k)`, unaligned. A 4×4 transpose in each 128-bit block (two unpacks, then two
