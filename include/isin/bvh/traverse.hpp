@@ -297,7 +297,8 @@ bool walk_ray(const BvhTree<T>& tree, const SlabRay<T>& r, T& t_max, Leaf& leaf)
 // diffuse bounces spent 48% of their samples in take_nearest's calls, 15% in hit_children's),
 // and the pairs ran 0.96× as fast as the same rays one by one there, 1.02× on the trefoil.
 // Inlined (stop 40, same process, medians of 9-11): 0.99-1.05× and 1.10-1.11×; diffuse-bounce
-// streams 1.00-1.06× as fast as before on the five benchmark meshes (g++; clang++ 1.00-1.04×).
+// streams 0.99-1.06× as fast as before on the five benchmark meshes (g++; clang++ 1.00-1.04×
+// on the soup and the trefoil).
 template <Visit visit, class T, class LeafA, class LeafB>
 unsigned walk_pair(const BvhTree<T>& tree, const SlabRay<T>& a, T& t_a, LeafA& leaf_a, const SlabRay<T>& b, T& t_b,
                    LeafB& leaf_b) {

@@ -608,7 +608,7 @@ private:
     // 70 ms and of the 82k icosphere 43 → 40-41 (6.5 → 3.1 and 6.0 → 2.0 triangles tested a
     // block), the terrain's shadow rays 63 → 60. Always inlined into the packet's leaf test:
     // shadow-ray streams 1.03-1.07× as fast on the trefoil, terrain and 82k icosphere, the soup
-    // 1.01, the 1.3M icosphere 0.99, camera rays 1.00-1.02 (stop 40, same process, medians of 11).
+    // 1.01, the 1.3M icosphere 0.99, camera rays 0.98-1.02 (stop 40, same process, medians of 11).
     ISIN_DETAIL_INLINE static unsigned triangles_in_reach(const typename TriangleBlocks<float>::Block& block,
                                                           const detail::RayPacket& p) noexcept {
         const auto planes = [&](int a, __m256& near, __m256& far) {
