@@ -3,16 +3,22 @@
 ///  - ISIN_DETAIL_COLD: a rare path (an error, a fallback) kept out of line, so that the hot
 ///    loop around it stays small.
 ///  - ISIN_DETAIL_INLINE: a function that must be inlined into its hot loop (measured: a call
-///    costs; compilers left some out of loops that grew).
+///    costs; compilers left some out of loops that grew). Only when optimising: an -O0 build
+///    (the tests' debug and sanitizer builds) gains nothing from it and compiles slower.
 ///  - ISIN_DETAIL_LAMBDA_INLINE: the same for a lambda, written after its parameter list.
 ///  - ISIN_DETAIL_NOINLINE: a large function kept out of its caller, whose own loop it would
 ///    otherwise crowd (measured: the stream calls' single-ray loop).
 /// And detail::prefetch, a cache hint.
 #if defined(__GNUC__) || defined(__clang__)
 #define ISIN_DETAIL_COLD __attribute__((noinline, cold))
+#if defined(__OPTIMIZE__)
 #define ISIN_DETAIL_INLINE inline __attribute__((always_inline))
-#define ISIN_DETAIL_NOINLINE __attribute__((noinline))
 #define ISIN_DETAIL_LAMBDA_INLINE __attribute__((always_inline))
+#else
+#define ISIN_DETAIL_INLINE inline
+#define ISIN_DETAIL_LAMBDA_INLINE
+#endif
+#define ISIN_DETAIL_NOINLINE __attribute__((noinline))
 #else
 #define ISIN_DETAIL_COLD
 #define ISIN_DETAIL_INLINE inline
