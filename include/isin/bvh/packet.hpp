@@ -561,6 +561,17 @@ inline float packet_t_far(const RayPacket& p) noexcept {
     return _mm_cvtss_f32(h);
 }
 
+/// walk_packets' default `soon`: no hint.
+struct NoLeafHint {
+    void operator()(std::uint32_t) const noexcept {}
+};
+
+/// Asks the cache for all of node `n` (its four lines).
+inline void prefetch_node(const BvhTree<float>::Node& n) noexcept {
+    const char* const from = reinterpret_cast<const char*>(&n);
+    for (std::size_t b = 0; b < sizeof n; b += 64) prefetch(from + b);
+}
+
 /// Traces N packets (1 or 2) through `tree` together, nearest-first by the entry bounds of the
 /// interval test (Visit::nearest) or in any order (Visit::any): ray k of packet i is ray
 /// 16·i + k of the walk. The interval test is on `box`, which bounds the rays of all of them
@@ -570,8 +581,15 @@ inline float packet_t_far(const RayPacket& p) noexcept {
 /// `leaf(leaf_index, rays)` with the mask of those rays; the leaf lowers their t_far (nearest)
 /// and returns the rays it is done with (any: they leave their packet). Stops when the stack is
 /// empty or no ray is left.
-template <Visit visit, std::size_t N, class Leaf>
-void walk_packets(const BvhTree<float>& tree, RayPacket* const (&ps)[N], const PacketBounds& box, Leaf&& leaf) {
+/// The children some ray enters are asked of the cache when their parent is tested, before the
+/// walk gets to them: a node by prefetch_node, a leaf's data by `soon(leaf_index)` (the caller's
+/// hint). Measured, stop 41 (1920×1080 streams, same process, medians of 11): camera rays
+/// 1.04-1.07× as fast on the trefoil and the terrain, 1.09 on the 1.3M icosphere, 1.01-1.06 on
+/// the 82k one and 1.02 on the soup; shadow rays 1.01-1.05× (the soup's 1.04). Leaves alone
+/// gave about half of it on the trefoil and the terrain, nothing on the 82k icosphere.
+template <Visit visit, std::size_t N, class Leaf, class Soon = NoLeafHint>
+void walk_packets(const BvhTree<float>& tree, RayPacket* const (&ps)[N], const PacketBounds& box, Leaf&& leaf,
+                  const Soon& soon = {}) {
     static_assert(N == 1 || N == 2, "one packet or two");
     using Node = BvhTree<float>::Node;
     constexpr std::uint32_t leaf_bit = BvhTree<float>::leaf_bit;
@@ -660,7 +678,12 @@ void walk_packets(const BvhTree<float>& tree, RayPacket* const (&ps)[N], const P
                 const bool own = !box.one_origin || (n.child[k] & leaf_bit);
                 rays[k] = own ? entering(n, k) & live : e.rays & live;
                 tested[k] = own ? calls + 1 : 0;
-                if (!rays[k]) mask &= ~(1u << k);
+                if (!rays[k])
+                    mask &= ~(1u << k);
+                else if (n.child[k] & leaf_bit)
+                    soon(n.child[k] & ~leaf_bit);
+                else
+                    prefetch_node(nodes[n.child[k]]);
             }
             if (mask) {
                 int k = lowest_bit(mask);
@@ -697,10 +720,10 @@ void walk_packets(const BvhTree<float>& tree, RayPacket* const (&ps)[N], const P
 }
 
 /// One packet's walk (walk_packets): `leaf(leaf_index, rays)`, rays a mask of its lanes.
-template <Visit visit, class Leaf>
-void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf) {
+template <Visit visit, class Leaf, class Soon = NoLeafHint>
+void walk_packet(const BvhTree<float>& tree, RayPacket& p, Leaf&& leaf, const Soon& soon = {}) {
     RayPacket* const ps[1] = {&p};
-    walk_packets<visit>(tree, ps, p, leaf);
+    walk_packets<visit>(tree, ps, p, leaf, soon);
 }
 
 } // namespace detail
