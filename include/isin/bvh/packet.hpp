@@ -287,21 +287,35 @@ inline unsigned packet_t_far_from(const float (&t_max)[RayPacket::size], int n,
 #endif
 }
 
-// The lanes whose direction d lies within packet_cone_cos of ray `first`'s d0: d·d0 ≥ cos·|d|·|d0|.
-inline unsigned packet_cone(const float (&c)[6][RayPacket::size], int first) noexcept {
+// The lanes of `c` whose direction d lies within packet_cone_cos of d0, the direction of lane
+// `first` of `c0`: d·d0 ≥ cos·|d|·|d0|. make_packet tests a chunk's rays against its first ray
+// (c0 is c: `same`); packets_share, one packet's first ray against the other's (one rule for
+// both).
+template <bool same>
+ISIN_DETAIL_INLINE unsigned packet_cone(const float (&c)[6][RayPacket::size], const float (&c0)[6][RayPacket::size],
+                                        int first) noexcept {
 #if defined(__AVX512F__)
-    // d0 and |d0| from their lanes (permutes), not as scalars loaded from `c` with a scalar
+    // d0 and |d0| from their lanes (permutes), not as scalars loaded from `c0` with a scalar
     // square root: camera-ray streams 1.02-1.06× as fast (stop 40, same process, medians of 11:
     // the trefoil 1.05-1.06 and the terrain 1.04-1.05 in two runs, 1.3M icosphere 1.03, soup 1.02).
     const __m512i at = _mm512_set1_epi32(first);
+    const auto length = [](__m512 x, __m512 y, __m512 z) {
+        return sqrt16(_mm512_fmadd_ps(z, z, _mm512_fmadd_ps(y, y, _mm512_mul_ps(x, x))));
+    };
     const __m512 dx = _mm512_loadu_ps(c[3]), dy = _mm512_loadu_ps(c[4]), dz = _mm512_loadu_ps(c[5]);
-    const __m512 len = sqrt16(_mm512_fmadd_ps(dz, dz, _mm512_fmadd_ps(dy, dy, _mm512_mul_ps(dx, dx))));
-    const __m512 d_d0 = _mm512_fmadd_ps(dz, permute16(at, dz),
-                                        _mm512_fmadd_ps(dy, permute16(at, dy), _mm512_mul_ps(dx, permute16(at, dx))));
-    const __m512 cos_len0 = _mm512_mul_ps(_mm512_set1_ps(packet_cone_cos), permute16(at, len));
+    const __m512 d0x = permute16(at, _mm512_loadu_ps(c0[3])), d0y = permute16(at, _mm512_loadu_ps(c0[4])),
+                 d0z = permute16(at, _mm512_loadu_ps(c0[5]));
+    const __m512 len = length(dx, dy, dz);
+    __m512 len0;
+    if constexpr (same)
+        len0 = permute16(at, len); // lane `first` of len
+    else
+        len0 = length(d0x, d0y, d0z);
+    const __m512 d_d0 = _mm512_fmadd_ps(dz, d0z, _mm512_fmadd_ps(dy, d0y, _mm512_mul_ps(dx, d0x)));
+    const __m512 cos_len0 = _mm512_mul_ps(_mm512_set1_ps(packet_cone_cos), len0);
     return _mm512_cmp_ps_mask(d_d0, _mm512_mul_ps(cos_len0, len), _CMP_GE_OQ);
 #else
-    const float d0x = c[3][first], d0y = c[4][first], d0z = c[5][first];
+    const float d0x = c0[3][first], d0y = c0[4][first], d0z = c0[5][first];
     const float cos_len0 = packet_cone_cos * std::sqrt(d0x * d0x + d0y * d0y + d0z * d0z);
     unsigned cone = 0;
     for (int g = 0; g < RayPacket::size; g += 8) {
@@ -438,7 +452,7 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
     unsigned lanes = usable;
     for (int a = 0; a < 3; ++a) lanes &= (octant[a] >> first) & 1u ? octant[a] : ~octant[a];
     if (!(lanes & (lanes - 1))) return 0;
-    lanes &= packet_cone(c, first);
+    lanes &= packet_cone<true>(c, c, first);
     if (bit_count(lanes) < packet_min_rays) return 0;
     // The slab constants, as prepare_slab's fast form; a lane whose products could overflow
     // leaves the packet.

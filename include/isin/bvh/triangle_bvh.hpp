@@ -451,11 +451,7 @@ private:
             negative[axis] = !detail::packet_positive(a.p, axis);
         }
         const int i = detail::lowest_bit(a.p.lanes), j = detail::lowest_bit(b.p.lanes);
-        float dd_a = 0.0f, dd_b = 0.0f, d_ab = 0.0f;
-        for (int axis = 3; axis < 6; ++axis)
-            dd_a += a.c[axis][i] * a.c[axis][i], dd_b += b.c[axis][j] * b.c[axis][j],
-                d_ab += a.c[axis][i] * b.c[axis][j];
-        if (!(d_ab >= detail::packet_cone_cos * std::sqrt(dd_a * dd_b))) return false;
+        if (!((detail::packet_cone<false>(b.c, a.c, i) >> j) & 1u)) return false;
         float lo[6], hi[6];
         for (int k = 0; k < 6; ++k) lo[k] = std::min(a.p.lo[k], b.p.lo[k]), hi[k] = std::max(a.p.hi[k], b.p.hi[k]);
         if (!detail::origins_close(lo, hi, tree_.leaf_scale())) return false;
