@@ -467,7 +467,10 @@ TEST_CASE("Bvh packets: two packets walked as one offer each ray every leaf its 
     // Pairs of adjacent 4×4 tiles of camera rays, from one eye and (shadow rays' case) from
     // origins scattered about it, walked together under their joint interval test
     // (walk_packets, as the stream calls do): every leaf a ray's own walk enters (no hit lowers
-    // t_far here, so that is every leaf along the ray) must be offered to that ray.
+    // t_far here, so that is every leaf along the ray) must be offered to that ray. And each
+    // leaf offered to two rays or more must have been named to the walk's cache hint (`soon`)
+    // before, by its index (a subtree one ray enters alone is walked by the single-ray walk,
+    // which gives no hints).
     const auto tris = workloads::triangle_soup<float>(4000, 9, 1.5);
     const isin::Bvh<float> bvh{tris};
     const auto& tree = bvh.tree();
@@ -480,7 +483,7 @@ TEST_CASE("Bvh packets: two packets walked as one offer each ray every leaf its 
             for (auto& r : rays) r.origin = r.origin + isin::Vertex<float>{jitter(rng), jitter(rng), jitter(rng)};
         float t_max[16];
         for (float& t : t_max) t = std::numeric_limits<float>::infinity();
-        int pairs = 0, entered = 0, missed = 0;
+        int pairs = 0, entered = 0, missed = 0, unhinted = 0, hints = 0, bad_hints = 0;
         for (std::size_t first = 0; first + 32 <= rays.size(); first += 32) {
             alignas(64) float c[2][6][16];
             isin::detail::RayPacket p[2];
@@ -508,11 +511,20 @@ TEST_CASE("Bvh packets: two packets walked as one offer each ray every leaf its 
             CHECK(box.one_origin == !scattered);
             std::vector<std::set<std::uint32_t>> offered(32);
             isin::detail::RayPacket* const both[2] = {&p[0], &p[1]};
-            isin::detail::walk_packets<isin::Visit::nearest>(tree, both, box, [&](std::uint32_t leaf, unsigned active) {
-                for (; active; active &= active - 1)
-                    offered[std::size_t(isin::detail::lowest_bit(active))].insert(leaf);
-                return 0u;
-            });
+            std::set<std::uint32_t> hinted;
+            isin::detail::walk_packets<isin::Visit::nearest>(
+                tree, both, box,
+                [&](std::uint32_t leaf, unsigned active) {
+                    unhinted += isin::detail::bit_count(active) > 1 && !hinted.count(leaf);
+                    for (; active; active &= active - 1)
+                        offered[std::size_t(isin::detail::lowest_bit(active))].insert(leaf);
+                    return 0u;
+                },
+                [&](std::uint32_t leaf) {
+                    ++hints;
+                    bad_hints += leaf >= tree.leaf_count();
+                    hinted.insert(leaf);
+                });
             ++pairs;
             for (std::size_t k = 0; k < 32; ++k) {
                 float t = std::numeric_limits<float>::infinity();
@@ -526,6 +538,9 @@ TEST_CASE("Bvh packets: two packets walked as one offer each ray every leaf its 
         CHECK(pairs > 40);
         CHECK(entered > 1000);
         CHECK(missed == 0);
+        CHECK(hints > 1000);
+        CHECK(bad_hints == 0);
+        CHECK(unhinted == 0);
     }
 #endif
 }

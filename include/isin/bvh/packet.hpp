@@ -597,7 +597,7 @@ inline void prefetch_node(const BvhTree<float>::Node& n) noexcept {
 /// empty or no ray is left.
 /// The children some ray enters are asked of the cache when their parent is tested, before the
 /// walk gets to them: a node by prefetch_node, a leaf's data by `soon(leaf_index)` (the caller's
-/// hint). Measured, stop 41 (1920×1080 streams, same process, medians of 11, two to four runs):
+/// hint; not in a subtree that one ray walks alone). Measured, stop 41 (1920×1080 streams, same process, medians of 11, two to four runs):
 /// camera rays 1.05-1.07× as fast on the trefoil, 1.03-1.07 on the terrain, 1.09-1.17 on the
 /// 1.3M icosphere, 1.01-1.06 on the 82k one, 1.02 on the soup; shadow rays 0.98-1.05×. Leaves
 /// alone gave about half of it on the trefoil and the terrain, nothing on the 82k icosphere.
