@@ -580,12 +580,6 @@ struct NoLeafHint {
     void operator()(std::uint32_t) const noexcept {}
 };
 
-/// Asks the cache for all of node `n` (its four lines).
-inline void prefetch_node(const BvhTree<float>::Node& n) noexcept {
-    const char* const from = reinterpret_cast<const char*>(&n);
-    for (std::size_t b = 0; b < sizeof n; b += 64) prefetch(from + b);
-}
-
 /// Traces N packets (1 or 2) through `tree` together, nearest-first by the entry bounds of the
 /// interval test (Visit::nearest) or in any order (Visit::any): ray k of packet i is ray
 /// 16·i + k of the walk. The interval test is on `box`, which bounds the rays of all of them
@@ -596,9 +590,9 @@ inline void prefetch_node(const BvhTree<float>::Node& n) noexcept {
 /// and returns the rays it is done with (any: they leave their packet). Stops when the stack is
 /// empty or no ray is left.
 /// The children some ray enters are asked of the cache when their parent is tested, before the
-/// walk gets to them: a node by prefetch_node, a leaf's data by `soon(leaf_index)` (the caller's
-/// hint; not in a subtree that one ray walks alone). Measured, stop 41 (1920×1080 streams, same process, medians of 11, two to four runs):
-/// camera rays 1.05-1.07× as fast on the trefoil, 1.03-1.07 on the terrain, 1.09-1.17 on the
+/// walk gets to them: a node's four lines, a leaf's data by `soon(leaf_index)` (the caller's
+/// hint; not in a subtree that one ray walks alone). Measured, stop 41 (1920×1080 streams, same
+/// process, medians of 11, two to four runs): camera rays 1.05-1.07× as fast on the trefoil, 1.03-1.07 on the terrain, 1.09-1.17 on the
 /// 1.3M icosphere, 1.01-1.06 on the 82k one, 1.02 on the soup; shadow rays 0.98-1.05×. Leaves
 /// alone gave about half of it on the trefoil and the terrain, nothing on the 82k icosphere.
 template <Visit visit, std::size_t N, class Leaf, class Soon = NoLeafHint>
@@ -697,7 +691,7 @@ void walk_packets(const BvhTree<float>& tree, RayPacket* const (&ps)[N], const P
                 else if (n.child[k] & leaf_bit)
                     soon(n.child[k] & ~leaf_bit);
                 else
-                    prefetch_node(nodes[n.child[k]]);
+                    prefetch_lines(nodes + n.child[k], sizeof(Node));
             }
             if (mask) {
                 int k = lowest_bit(mask);

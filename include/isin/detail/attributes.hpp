@@ -8,7 +8,9 @@
 ///  - ISIN_DETAIL_LAMBDA_INLINE: the same for a lambda, written after its parameter list.
 ///  - ISIN_DETAIL_NOINLINE: a large function kept out of its caller, whose own loop it would
 ///    otherwise crowd (measured: the stream calls' single-ray loop).
-/// And detail::prefetch, a cache hint.
+/// And detail::prefetch and prefetch_lines, cache hints.
+#include <cstddef>
+
 #if defined(__GNUC__) || defined(__clang__)
 #define ISIN_DETAIL_COLD __attribute__((noinline, cold))
 #if defined(__OPTIMIZE__)
@@ -35,6 +37,12 @@ inline void prefetch(const void* p) noexcept {
 #else
     (void)p;
 #endif
+}
+/// prefetch for each 64-byte line from `p` on, over `bytes` bytes (a node, a leaf's block, a run
+/// of rays).
+inline void prefetch_lines(const void* p, std::size_t bytes) noexcept {
+    const char* const from = static_cast<const char*>(p);
+    for (std::size_t b = 0; b < bytes; b += 64) prefetch(from + b);
 }
 } // namespace detail
 } // namespace isin
