@@ -530,7 +530,7 @@ inline bool packet_positive(const PacketBounds& p, int a) noexcept {
 
 /// Which rays of the packet enter child `k` of `n` before their own t_far: hit_children's fast
 /// form, lane by lane, on the rays instead of the children (the rays' test of a leaf's box).
-inline unsigned packet_rays_entering(const BvhTree<float>::Node& n, int k, const RayPacket& p) noexcept {
+ISIN_DETAIL_INLINE unsigned packet_rays_entering(const BvhTree<float>::Node& n, int k, const RayPacket& p) noexcept {
 #if defined(__AVX512F__)
     { // the 16 rays in one register
         __m512 t0[3], t1[3];

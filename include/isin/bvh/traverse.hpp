@@ -298,7 +298,10 @@ bool walk_ray(const BvhTree<T>& tree, const SlabRay<T>& r, T& t_max, Leaf& leaf)
 // and the pairs ran 0.96× as fast as the same rays one by one there, 1.02× on the trefoil.
 // Inlined (stop 40, same process, medians of 9-11): 0.99-1.05× and 1.10-1.11×; diffuse-bounce
 // streams 0.99-1.06× as fast as before on the five benchmark meshes (g++; clang++ 1.00-1.04×
-// on the soup and the trefoil).
+// on the soup and the trefoil). How much g++ inlines depends on the translation unit: in
+// vs_embree.cpp (large) it still called lanes_hit, then Sheared8, finish8 and skip_lanes, from
+// the nearest-hit pairs, and test_block from the any-hit walks. So the leaf tests are forced
+// inline down to their lane arithmetic (stop 42; test_block's comment lists them).
 template <Visit visit, class T, class LeafA, class LeafB>
 unsigned walk_pair(const BvhTree<T>& tree, const SlabRay<T>& a, T& t_a, LeafA& leaf_a, const SlabRay<T>& b, T& t_b,
                    LeafB& leaf_b) {

@@ -693,15 +693,15 @@ private:
 
     // The lanes of leaf `leaf` hit with 0 < t < t_max, without the skipped triangles.
     template <bool cull>
-    unsigned lanes_hit(std::uint32_t leaf, detail::TriangleRay<T>& r, T t_max, detail::LaneHits<T>& hits,
-                       const std::uint8_t* skip) const noexcept {
+    ISIN_DETAIL_INLINE unsigned lanes_hit(std::uint32_t leaf, detail::TriangleRay<T>& r, T t_max,
+                                          detail::LaneHits<T>& hits, const std::uint8_t* skip) const noexcept {
         if (!r.ready()) return 0;
         const auto& block = blocks_[leaf];
         return skip_lanes(block, detail::test_block<cull>(block, r, t_max, hits), skip);
     }
     // `lanes` of `block` without the triangles the skip mask names.
-    static unsigned skip_lanes(const typename TriangleBlocks<T>::Block& block, unsigned lanes,
-                               const std::uint8_t* skip) noexcept {
+    ISIN_DETAIL_INLINE static unsigned skip_lanes(const typename TriangleBlocks<T>::Block& block, unsigned lanes,
+                                                  const std::uint8_t* skip) noexcept {
         if (skip)
             for (unsigned rest = lanes; rest; rest &= rest - 1) {
                 const int k = detail::lowest_bit(rest);

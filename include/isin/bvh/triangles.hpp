@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "../detail/attributes.hpp"
 #include "../detail/parallel.hpp"
 #include "../ray.hpp"
 #include "../triangle.hpp"
@@ -146,9 +147,13 @@ namespace detail {
 /// The watertight test of a block: the lanes hit with 0 < t < t_max (front faces only when
 /// `cull`), their t, u, v in `out` unless `store` is false (then `out` may or may not be written:
 /// a caller that wants to know only whether anything is hit). The ray must be ready().
+// Forced inline (ISIN_DETAIL_INLINE), as is everything it runs on the hot path — Sheared8,
+// KahanEdges8, kahan_difference_of_products8/4, finish8, test_block_avx2 — and the Bvh's
+// lanes_hit and skip_lanes, so that every walk runs the leaf test in its own loop whatever else
+// the translation unit holds (walk_pair's comment); test_block_exact stays out of line (cold).
 template <bool cull, bool store = true, class T>
-[[nodiscard]] inline unsigned test_block(const TriangleBlock<T>& b, const TriangleRay<T>& r, T t_max,
-                                         LaneHits<T>& out) noexcept {
+[[nodiscard]] ISIN_DETAIL_INLINE unsigned test_block(const TriangleBlock<T>& b, const TriangleRay<T>& r, T t_max,
+                                                     LaneHits<T>& out) noexcept {
 #if defined(ISIN_DETAIL_TRIANGLES_AVX2)
     return test_block_avx2<cull, store>(b, r, t_max, out);
 #else

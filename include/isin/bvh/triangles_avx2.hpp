@@ -21,7 +21,7 @@ namespace detail {
 // x, y across the ray, z along it (not yet scaled by Sz).
 struct Sheared8 {
     __m256 x[3], y[3], z[3];
-    Sheared8(const TriangleBlock<float>& b, const TriangleRay<float>& r) noexcept {
+    ISIN_DETAIL_INLINE Sheared8(const TriangleBlock<float>& b, const TriangleRay<float>& r) noexcept {
         const __m256 ox = _mm256_set1_ps(r.org[r.shear.kx]), oy = _mm256_set1_ps(r.org[r.shear.ky]);
         const __m256 oz = _mm256_set1_ps(r.org[r.shear.kz]);
         const __m256 Sx = _mm256_set1_ps(r.shear.Sx), Sy = _mm256_set1_ps(r.shear.Sy);
@@ -53,7 +53,7 @@ inline __m256 exact_difference_of_products8(const Halves& a, const Halves& b, co
 
 // a·b − c·d on 8 float lanes by Kahan's algorithm with FMA: the sign is exact unless a product
 // overflows or underflows float (then the result is not finite, or tiny).
-inline __m256 kahan_difference_of_products8(__m256 a, __m256 b, __m256 c, __m256 d) noexcept {
+ISIN_DETAIL_INLINE __m256 kahan_difference_of_products8(__m256 a, __m256 b, __m256 c, __m256 d) noexcept {
     const __m256 cd = _mm256_mul_ps(c, d);
     const __m256 error = _mm256_fmsub_ps(c, d, cd); // c·d − cd, exact
     return _mm256_sub_ps(_mm256_fmsub_ps(a, b, cd), error);
@@ -63,8 +63,8 @@ inline __m256 kahan_difference_of_products8(__m256 a, __m256 b, __m256 c, __m256
 // all ≤ 0 unless culling), det ≠ 0, t = (U·Az + V·Bz + W·Cz)/det in (0, t_max); u = V/det,
 // v = W/det. Returns the lanes hit; fills `out` (when `store`) only when there are some.
 template <bool cull, bool store>
-inline unsigned finish8(__m256 U, __m256 V, __m256 W, const __m256 (&z)[3], float Sz, float t_max,
-                        LaneHits<float>& out) noexcept {
+ISIN_DETAIL_INLINE unsigned finish8(__m256 U, __m256 V, __m256 W, const __m256 (&z)[3], float Sz, float t_max,
+                                    LaneHits<float>& out) noexcept {
     const __m256 zero = _mm256_setzero_ps();
     const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
     const __m256 front = _mm256_cmp_ps(_mm256_min_ps(_mm256_min_ps(U, V), W), zero, _CMP_GE_OQ); // clockwise (§2)
@@ -92,7 +92,7 @@ inline unsigned finish8(__m256 U, __m256 V, __m256 W, const __m256 (&z)[3], floa
 // operations each (test_block_avx2's fast form).
 struct KahanEdges8 {
     __m256 U, V, W;
-    explicit KahanEdges8(const Sheared8& p) noexcept
+    ISIN_DETAIL_INLINE explicit KahanEdges8(const Sheared8& p) noexcept
         : U(kahan_difference_of_products8(p.x[2], p.y[1], p.y[2], p.x[1])),   // WBW: U = Cx·By − Cy·Bx
           V(kahan_difference_of_products8(p.x[0], p.y[2], p.y[0], p.x[2])),   // WBW: V = Ax·Cy − Ay·Cx
           W(kahan_difference_of_products8(p.x[1], p.y[0], p.y[1], p.x[0])) {} // WBW: W = Bx·Ay − By·Ax
@@ -349,7 +349,7 @@ inline void set_shears(const float* x, const float* y, const float* z, ShearLane
 }
 
 // a·b − c·d on 4 double lanes as difference_of_products<double> (Kahan's algorithm, FMA).
-inline __m256d kahan_difference_of_products4(__m256d a, __m256d b, __m256d c, __m256d d) noexcept {
+ISIN_DETAIL_INLINE __m256d kahan_difference_of_products4(__m256d a, __m256d b, __m256d c, __m256d d) noexcept {
     const __m256d cd = _mm256_mul_pd(c, d);
     const __m256d error = _mm256_fmsub_pd(c, d, cd); // c·d − cd, exact
     return _mm256_sub_pd(_mm256_fmsub_pd(a, b, cd), error);
@@ -358,8 +358,8 @@ inline __m256d kahan_difference_of_products4(__m256d a, __m256d b, __m256d c, __
 // The double test as two halves of 4 lanes, as intersect_sheared (whose difference_of_products
 // is this same Kahan's algorithm); a half whose first lane is padding is skipped.
 template <bool cull, bool store>
-inline unsigned test_block_avx2(const TriangleBlock<double>& b, const TriangleRay<double>& r, double t_max,
-                                LaneHits<double>& out) noexcept {
+ISIN_DETAIL_INLINE unsigned test_block_avx2(const TriangleBlock<double>& b, const TriangleRay<double>& r, double t_max,
+                                            LaneHits<double>& out) noexcept {
     const __m256d ox = _mm256_set1_pd(r.org[r.shear.kx]), oy = _mm256_set1_pd(r.org[r.shear.ky]);
     const __m256d oz = _mm256_set1_pd(r.org[r.shear.kz]);
     const __m256d Sx = _mm256_set1_pd(r.shear.Sx), Sy = _mm256_set1_pd(r.shear.Sy), Sz = _mm256_set1_pd(r.shear.Sz);
