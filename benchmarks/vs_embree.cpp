@@ -11,7 +11,12 @@
 // to std::threads from a shared counter, identically for both libraries; every tracing thread
 // sets FTZ/DAZ (Embree's documented recommendation), isin's threads included, so both run in
 // the same floating-point mode. Figures are medians of --repeats runs, taken interleaved
-// (isin, Embree, isin, Embree, …) so that drifts of this shared machine hit both alike.
+// (isin, Embree, isin, Embree, …) so that drifts of this shared machine hit both alike. The
+// k-th tracing thread of every measure is pinned to the k-th CPU the process may use (its
+// affinity mask, e.g. from taskset), so a measure at one thread never lands on another core
+// than the one before it, nor moves between cores half-way (--no-pin leaves it to the
+// scheduler): on this project's 2-vCPU machine the two vCPUs ran the same rays up to 7% apart,
+// and unpinned one-thread measures of one process moved between them from measure to measure.
 //
 // Build times: Embree sizes its thread pool once per process (a later device with threads=1
 // still builds on every core), so each build time is measured in a fresh child process: this
@@ -31,12 +36,14 @@
 // edges its count differs from isin's, the robust one should not.
 //
 // Run: build/…/benchmarks/vs_embree [--mesh NAME] [--repeats N] [--threads-list 1,2]
-//      [--width W --height H] [--csv FILE] [--stream-csv FILE]   (built with -march=native)
+//      [--width W --height H] [--csv FILE] [--stream-csv FILE] [--no-pin]   (built with -march=native)
 #include <embree3/rtcore.h>
 
 #include "embree_scene.hpp"
 #include "embree_studies.hpp"
 #include <pmmintrin.h>
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <unistd.h>
 #include <xmmintrin.h>
@@ -81,7 +88,33 @@ struct Options {
     int build_threads = 1;
     std::string build_library = "both"; // child mode: isin, embree or both
     std::string self;                   // this program, re-executed for the build times
+    bool pin = true;                    // run_bands pins its threads (see the top of this file)
 };
+
+// Whether run_bands pins its threads: Options::pin, set once before anything is traced.
+bool pin_threads = true;
+
+// The CPUs this process may run on (its affinity mask), lowest first; empty when unknown.
+std::vector<std::size_t> allowed_cpus() {
+    std::vector<std::size_t> cpus;
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    if (sched_getaffinity(0, sizeof set, &set) == 0)
+        for (std::size_t c = 0; c < CPU_SETSIZE; ++c)
+            if (CPU_ISSET(c, &set)) cpus.push_back(c);
+    return cpus;
+}
+
+// Pins the calling thread, the k-th of a measure, to the k-th allowed CPU (round robin). A
+// refusal leaves the thread where the scheduler puts it: noisier, not wrong.
+void pin_thread(int k) {
+    static const std::vector<std::size_t> cpus = allowed_cpus();
+    if (!pin_threads || cpus.empty()) return;
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(cpus[std::size_t(k) % cpus.size()], &set);
+    (void)pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+}
 
 void set_fp_mode() { // Embree's recommendation for every thread that calls it
     // = _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON) + _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON),
@@ -125,19 +158,21 @@ struct Totals {
     double sum_t = 0;
 };
 
-// Calls band(b, totals_b) for every band b across `threads` std::threads (FTZ/DAZ set in each);
-// returns the wall time and the totals, summed in band order (the same for any thread count).
+// Calls band(b, totals_b) for every band b across `threads` std::threads (FTZ/DAZ set in each,
+// each pinned: pin_thread); returns the wall time and the totals, summed in band order (the same
+// for any thread count).
 template <class Band>
 Totals run_bands(int bands, int threads, double& seconds, Band&& band) {
     std::vector<Totals> per(std::size_t(std::max(bands, 0)));
     std::atomic<int> next{0};
-    const auto worker = [&] {
+    const auto worker = [&](int k) {
+        pin_thread(k);
         set_fp_mode();
         for (int b; (b = next.fetch_add(1, std::memory_order_relaxed)) < bands;) band(b, per[std::size_t(b)]);
     };
     const auto t0 = Clock::now();
     std::vector<std::thread> pool;
-    for (int i = 0; i < threads; ++i) pool.emplace_back(worker);
+    for (int i = 0; i < threads; ++i) pool.emplace_back(worker, i);
     for (auto& t : pool) t.join();
     seconds = since(t0);
     Totals total;
@@ -648,6 +683,7 @@ void usage(FILE* f) {
         f,
         "usage: vs_embree [--mesh NAME|none] [--repeats N] [--threads-list 1,2] [--width W] [--height H] [--csv FILE]\n"
         "                 [--stream-csv FILE] [--studies all|none|spheres,instances,transparency,refit,groups,memory]\n"
+        "                 [--no-pin]\n"
         "isin's Bvh<float> against Embree %d.%d.%d (RTC_BUILD_QUALITY_MEDIUM) on the same triangles and rays:\n"
         "build times (each thread count in a fresh child process), primary rays of the note's camera\n"
         "(isin intersect, rtcIntersect1, rtcIntersect16 on 4x4 tiles) and shadow rays (occluded,\n"
@@ -660,7 +696,9 @@ void usage(FILE* f) {
                  "scene studies of\n"
                  "benchmarks/embree_studies.hpp (at half the width and height): spheres against Embree's points and\n"
                  "user geometry, instances, transparent shadows, refit, a mesh in 20 groups, memory. Exit status 1\n"
-                 "when the libraries' hit counts or sums of t differ by more than 1e-5 (relative).\n");
+                 "when the libraries' hit counts or sums of t differ by more than 1e-5 (relative).\n"
+                 "Each measure's k-th thread runs pinned to the k-th CPU the process may use; --no-pin leaves\n"
+                 "the threads to the scheduler.\n");
 }
 
 // `path` opened for appending, `header` written first when the file is empty; nullptr for no
@@ -855,6 +893,8 @@ int main(int argc, char** argv) {
                 opt.build_threads = std::max(1, std::atoi(value()));
             else if (a == "--library")
                 opt.build_library = value();
+            else if (a == "--no-pin")
+                opt.pin = false;
             else
                 throw std::invalid_argument("unknown option " + a);
         }
@@ -867,6 +907,7 @@ int main(int argc, char** argv) {
         usage(stderr);
         return 2;
     }
+    pin_threads = opt.pin;
     if (opt.build_only) return build_only(opt);
     char path[4096];
     const ssize_t len = readlink("/proc/self/exe", path, sizeof path - 1);

@@ -6,6 +6,9 @@
 # ratio: medians of --repeats interleaved measures, as vs_embree prints it). A machine shared with
 # other tenants runs some processes 10-25% slower for a while, on one library more than on the
 # other, so one run's ratio can fall a long way from the others (README, "Many rays at once").
+# vs_embree pins each measure's threads to the CPUs the process may use (since stop 42; --no-pin
+# passed through turns that off), so a one-thread measure no longer changes cores between
+# measures or half-way through one.
 # Usage: RUNS=5 scripts/streams.sh [vs_embree options, e.g. --threads-list 1 --repeats 7]
 # Writes the runs' rows to build/bench/streams.csv and their tables to build/bench/streams-run*.txt;
 # exits non-zero if isin and Embree disagree.
