@@ -371,8 +371,7 @@ private:
             const Vertex<T> extent = centroids.hi * T(0.5) - centroids.lo * T(0.5);
             const int a = extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2) : (extent.y >= extent.z ? 1 : 2);
             mid = first + count / 2;
-            std::nth_element(prims.begin() + first, prims.begin() + mid, prims.begin() + first + count,
-                             [a](const Prim& p, const Prim& q) { return p.centroid[a] < q.centroid[a]; });
+            select_median(prims, first, count, a);
             Box4<T> lb, lc, rb, rc;
             for (std::uint32_t i = first; i < mid; ++i)
                 lb.grow(prims[i].lo, prims[i].hi), lc.grow(prims[i].centroid, prims[i].centroid);
@@ -390,6 +389,29 @@ private:
         left = {node->left, left_centroids, depth + 1};
         right = {node->right, right_centroids, depth + 1};
         return true;
+    }
+
+    // Puts the primitives of prims[first, first + count) whose centroids lie below the median on
+    // axis a first (the median at first + count / 2). The selection runs over (coordinate, place)
+    // pairs and then moves each primitive once along its cycle: std::nth_element over Prim itself
+    // passes a 32-byte-aligned Prim by value in its heap fallback, which g++ reports as an ABI note.
+    static void select_median(Prims& prims, std::uint32_t first, std::uint32_t count, int a) {
+        std::vector<std::pair<T, std::uint32_t>> keys(count);
+        for (std::uint32_t i = 0; i < count; ++i) keys[i] = {T(prims[first + i].centroid[a]), i};
+        std::nth_element(keys.begin(), keys.begin() + count / 2, keys.end());
+        for (std::uint32_t i = 0; i < count; ++i) { // place i takes the primitive from place keys[i].second
+            if (keys[i].second == i) continue;
+            Prim held = prims[first + i];
+            std::uint32_t j = i;
+            while (keys[j].second != i) {
+                const std::uint32_t from = keys[j].second;
+                prims[first + j] = prims[first + from];
+                keys[j].second = j;
+                j = from;
+            }
+            prims[first + j] = held;
+            keys[j].second = j;
+        }
     }
 
     // Partitions prims[first, end) so that the primitives `goes_left` takes, of which there are
