@@ -50,3 +50,4 @@
 #include "transform.hpp"
 #include "triangle.hpp"
 #include "vec.hpp"
+#include "version.hpp"
