@@ -1,5 +1,9 @@
 #!/usr/bin/env bash
-# Quick start, command 2: installs what is missing, then
+# Quick start, command 2. Installs what is missing, then:
+#   bash scripts/test.sh         the quick check: the whole unit suite built once (g++, -O1,
+#                                warnings as errors) and run, without the tests that build
+#                                programs of their own (label integration); a few minutes on 2 cores.
+#   bash scripts/test.sh --all   what CI runs (.ci/run), about 25 minutes on 2 cores:
 #  1. checks the layout of every C++ file (scripts/format.sh --check, .clang-format);
 #  2. runs the stability, BVH and lane-filter tests (and the BVH stream and, at -march=native, vertex-normal tests) with g++ and clang++ at -O0 and at -O3 -march=native
 #     (their guarantees must survive any FMA contraction), on the portable path with no vector
@@ -8,8 +12,8 @@
 #  3. runs the whole test suite three times, warnings as errors: g++ (preset gcc), clang++ with
 #     AddressSanitizer and UndefinedBehaviorSanitizer (sanitize), clang++ with ThreadSanitizer
 #     (tsan). The tsan preset is the clang preset's build (RelWithDebInfo, warnings as errors)
-#     with ThreadSanitizer, so it also stands for it: one whole-suite build fewer kept CI under
-#     30 minutes on the 2-core Zen 5 machines (the four took 1,832 s there);
+#     with ThreadSanitizer, so it also stands for it: one whole-suite build fewer keeps CI within
+#     its time on 2 cores;
 #  4. compiles the benchmarks (against Embree: libembree-dev; load_models against assimp:
 #     libassimp-dev), warnings as errors, without running them;
 #  5. fuzzes the file readers (scripts/fuzz.sh, ISIN_FUZZ_SECONDS per target (at most), default 30; 0
@@ -17,8 +21,24 @@
 # set -e stops at the first step that fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/deps.sh clang-format parallel libembree-dev libassimp-dev
 jobs=$(nproc)
+case "${1:-}" in
+  --all) ;;
+  "")
+    bash scripts/deps.sh
+    echo "== isin: the unit tests (g++ -O1, warnings as errors); scripts/test.sh --all runs what CI runs" >&2
+    cmake -S . -B build/quick -DCMAKE_CXX_COMPILER=g++ -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FLAGS=-O1 \
+      -DISIN_WERROR=ON -DISIN_BUILD_EXAMPLES=OFF >/dev/null
+    cmake --build build/quick -j"$jobs"
+    ctest --test-dir build/quick -j"$jobs" --output-on-failure --label-exclude integration
+    exit 0
+    ;;
+  *)
+    echo "usage: bash scripts/test.sh [--all]" >&2
+    exit 2
+    ;;
+esac
+bash scripts/deps.sh clang-format parallel libembree-dev libassimp-dev
 bash scripts/format.sh --check
 # compiler | flags | extra CMake arguments
 configurations=(
