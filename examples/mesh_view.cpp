@@ -1,7 +1,7 @@
 // Renders a model (Wavefront OBJ with its .mtl materials and textures, or PLY) with the note's
 // Phong shading and shadows, smooth normals, on a checkerboard floor, the camera framed
 // automatically or placed by options; optional backface culling (§11); frames of an orbit
-// around it, and bands of rows (pieces a job scheduler runs apart: README).
+// around it, and bands of rows (pieces a job scheduler runs apart: docs/rendering.md).
 // Build: c++ -std=c++17 -O2 -DISIN_IMPLEMENTATION -I include examples/mesh_view.cpp -o mesh_view
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // Renders the note's scene — triangles U, Y, Z of example 5a, a mirror sphere, a glass sphere, a
 // checkerboard floor, two lights with shadows — to a PNG (or PPM); or frames of a camera path
-// through it, or one band of rows of either (pieces a job scheduler runs apart: README).
+// through it, or one band of rows of either (pieces a job scheduler runs apart: docs/rendering.md).
 // Build: c++ -std=c++17 -O2 -DISIN_IMPLEMENTATION -I include examples/notes_scene.cpp -o notes_scene
 #include <cmath>
 #include <cstdio>

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's build table: isin's and Embree's build times (RTC_BUILD_QUALITY_MEDIUM) of each
+# The build table of docs/performance.md: isin's and Embree's build times (RTC_BUILD_QUALITY_MEDIUM) of each
 # benchmark mesh on 1 and 2 threads, each library alone in a child process of its own
 # (`vs_embree --build-only`), the two libraries' processes alternated; prints the median of 5
 # processes of 5 builds each, and the cores kept busy (CPU time / wall time).

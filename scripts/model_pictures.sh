@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's pictures of models, rendered by mesh_view (Release, build/release/examples/):
+# The pictures of models in docs/meshes.md and the README, rendered by mesh_view
 #   docs/spider.png        assimp-testmodels' spider.obj (5 materials, 5 JPEG textures), sRGB
 #   docs/dragon.png        the Stanford dragon (871,414 triangles), normals computed, smooth shading
 #   docs/dragon_flat.png   a close-up of the dragon's brow, one normal per triangle (--flat)

@@ -5,8 +5,8 @@
 # ÷ rtcIntersect16, shadow rays ÷ rtcOccluded16, diffuse bounces ÷ rtcIntersect1 (each run's
 # ratio: medians of --repeats interleaved measures, as vs_embree prints it). A machine shared with
 # other tenants runs some processes 10-25% slower for a while, on one library more than on the
-# other, so one run's ratio can fall a long way from the others (README, "Many rays at once").
-# vs_embree pins each measure's threads to the CPUs the process may use (since stop 42; --no-pin
+# other, so one run's ratio can fall a long way from the others (docs/performance.md, "How we measure").
+# vs_embree pins each measure's threads to the CPUs the process may use (--no-pin
 # passed through turns that off), so a one-thread measure no longer changes cores between
 # measures or half-way through one.
 # Usage: RUNS=5 scripts/streams.sh [vs_embree options, e.g. --threads-list 1 --repeats 7]

@@ -289,7 +289,7 @@ TEST_CASE("Bvh stream: packets of rays grazing a triangle's corner, within round
     // cover this rounding): it must find the same hits.
     // Half the trials far from the world's origin, where o·inv rounds by far more than the rays'
     // distances do: with make_packet's margin set to 0, 8 rays of those trials got other hits
-    // than alone, none of the trials near the origin (stop 40).
+    // than alone, none of the trials near the origin.
     std::mt19937_64 rng(21);
     std::uniform_real_distribution<float> uni(-1, 1);
     int outside = 0, mismatches = 0;

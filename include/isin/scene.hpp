@@ -306,10 +306,10 @@ public:
     /// with plain -O3 (SSE2); on the note's scene (3 + 2 triangles) the scalar loop wins.
     std::size_t batch_min = 8;
     /// Triangle kinds with at least this many triangles get a Bvh when the scene is committed.
-    /// Measured crossover: see benchmarks/scaling and the README.
+    /// Measured crossover: see benchmarks/scaling and docs/meshes.md.
     std::size_t bvh_min = 64;
     /// Other kinds (spheres, users' kinds) with at least this many objects get a Bvh when the
-    /// scene is committed. Measured crossover for spheres: see benchmarks/scaling and the README.
+    /// scene is committed. Measured crossover for spheres: see benchmarks/scaling and docs/meshes.md.
     std::size_t shape_bvh_min = 8;
     /// Leaves of other kinds' Bvhs hold at most this many objects: they are tested one at a time
     /// (measured on spheres, vs_embree's spheres study: 2 traces 1.2-1.5× as fast as 8 from 1000
