@@ -4,6 +4,8 @@
 /// A/B against them on the vs_embree meshes, it is what makes the Bvh's leaves fast: in float,
 /// Kahan's difference of products on 8 lanes costs 4 operations an edge function where exact
 /// products in double cost about 13 (primary rays 5-10% faster).
+// Empty unless the target has AVX2 and FMA (and ISIN_FORCE_PURE is not defined).
+#if defined(__AVX2__) && defined(__FMA__) && !defined(ISIN_FORCE_PURE)
 #include <immintrin.h>
 
 #include <cstdint>
@@ -11,6 +13,8 @@
 
 #include "../detail/attributes.hpp"
 #include "../detail/avx512.hpp"
+#include "box.hpp"
+#include "triangle_block.hpp"
 
 #define ISIN_DETAIL_TRIANGLES_AVX2 1
 
@@ -402,3 +406,5 @@ ISIN_DETAIL_INLINE unsigned test_block_avx2(const TriangleBlock<double>& b, cons
 
 } // namespace detail
 } // namespace isin
+
+#endif // AVX2 and FMA
