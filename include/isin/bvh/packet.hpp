@@ -7,7 +7,7 @@
 /// The interval test is conservative, so the packet visits every node any of its rays enters;
 /// each child it lets in then takes the rays' own slab tests (traverse.hpp's fast form, lane by
 /// lane on the rays), so that a child no ray enters is dropped (shadow rays from a patch of
-/// surface spread their origins: with the interval test alone they ran 1.9× slower). Packets
+/// surface spread their origins, and the interval test alone lets in many such children). Packets
 /// whose rays share one origin (a pinhole camera's) take the rays' tests at leaves only.
 /// Two packets that agree (camera rays of adjacent 4×4 tiles) may be walked together under one
 /// interval test over both (walk_packets): one walk's node steps serve 32 rays.
@@ -64,16 +64,12 @@ inline constexpr float packet_cone_cos = 0.995f;
 inline constexpr int packet_min_rays = 4;
 /// How far apart, in leaf sizes (BvhTree::leaf_scale), the origins of a packet's rays may lie
 /// along any axis: a wider packet is a beam that its interval test and its rays' tests follow
-/// through many nodes and leaves that few of its rays enter. Shadow rays from 4×4 tiles of the
-/// random soup's hits (origins up to 40 apart in depth, leaves 1.19 across) ran 0.72× as fast as
-/// one by one, and 1.26-1.29× faster with this limit; in the other benchmark meshes' shadow
-/// packets, origins lie a median of 0.25-2 leaf sizes apart and 0.5-3% beyond 8 (at
-/// silhouettes), and their streams measured 0.97-1.01× as fast with it.
+/// through many nodes and leaves that few of its rays enter (the shadow rays of a random soup's
+/// hits); coherent packets' origins lie well within 8 leaf sizes, so the limit spares them.
 inline constexpr float packet_origin_spread = 8.0f;
 /// A subtree that this many rays of a packet or fewer enter is traced by each of them alone
-/// (the single-ray walk from its root): the packet's steps cost more than one ray's. Measured
-/// (stream / single time, two runs): shadow rays of the random soup 1.09-1.19 → 1.03-1.05, the
-/// other meshes unchanged within noise; with 2, the soup gained as much and the others lost 2-8%.
+/// (the single-ray walk from its root): the packet's steps cost more than one ray's, and from 2
+/// rays the coherent meshes lost more than the incoherent ones gained (docs/ideas.md).
 inline constexpr int packet_single_rays = 1;
 
 /// Rays [first, first + n) of an array, lane by lane into c (origin x, y, z, direction x, y,
@@ -296,8 +292,7 @@ ISIN_DETAIL_INLINE unsigned packet_cone(const float (&c)[6][RayPacket::size], co
                                         int first) noexcept {
 #if defined(__AVX512F__)
     // d0 and |d0| from their lanes (permutes), not as scalars loaded from `c0` with a scalar
-    // square root: camera-ray streams 1.02-1.06× as fast (stop 40, same process, medians of 11:
-    // the trefoil 1.05-1.06 and the terrain 1.04-1.05 in two runs, 1.3M icosphere 1.03, soup 1.02).
+    // square root, which would wait for a store and a load through memory.
     const __m512i at = _mm512_set1_epi32(first);
     const auto length = [](__m512 x, __m512 y, __m512 z) {
         return sqrt16(_mm512_fmadd_ps(z, z, _mm512_fmadd_ps(y, y, _mm512_mul_ps(x, x))));
@@ -591,10 +586,8 @@ struct NoLeafHint {
 /// empty or no ray is left.
 /// The children some ray enters are asked of the cache when their parent is tested, before the
 /// walk gets to them: a node's four lines, a leaf's data by `soon(leaf_index)` (the caller's
-/// hint; not in a subtree that one ray walks alone). Measured, stop 41 (1920×1080 streams, same
-/// process, medians of 11, two to four runs): camera rays 1.05-1.07× as fast on the trefoil, 1.03-1.07 on the terrain, 1.09-1.17 on the
-/// 1.3M icosphere, 1.01-1.06 on the 82k one, 1.02 on the soup; shadow rays 0.98-1.05×. Leaves
-/// alone gave about half of it on the trefoil and the terrain, nothing on the 82k icosphere.
+/// hint; not in a subtree that one ray walks alone): a packet's walk spends much of its time
+/// waiting for the first load of a node or of a leaf's block.
 template <Visit visit, std::size_t N, class Leaf, class Soon = NoLeafHint>
 void walk_packets(const BvhTree<float>& tree, RayPacket* const (&ps)[N], const PacketBounds& box, Leaf&& leaf,
                   const Soon& soon = {}) {
@@ -676,9 +669,8 @@ void walk_packets(const BvhTree<float>& tree, RayPacket* const (&ps)[N], const P
             unsigned mask = packet_hit_children(n, box, t_packet, t_near);
             // Each ray's own test: the children one enters. With one origin, inner children
             // take the interval test's word (a frustum's: one ray's entry is seldom dropped
-            // where the packet's is not) and the rays' tests wait for the leaves. Measured,
-            // primary rays on the five benchmark meshes, same process, medians of 9-11, four
-            // runs: 0.96-1.17× as fast as with every ray's test, most runs 1.02-1.09×.
+            // where the packet's is not) and the rays' tests wait for the leaves, which saves
+            // the rays' tests at every inner node.
             unsigned tested[8];
             const unsigned live = lanes();
             for (unsigned m = mask; m; m &= m - 1) {

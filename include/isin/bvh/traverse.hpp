@@ -187,9 +187,8 @@ ISIN_DETAIL_INLINE unsigned hit_children(const typename BvhTree<T>::Node& n, con
 // them, or calls a leaf; then, when that gives no next node, pops the next entry entered before
 // t_max. walk runs one walker to its end; traverse_pair interleaves two.
 // The ray's slab terms are held as `Slab`: a copy by default (walk: then the compiler knows that
-// no store of the walk changes them and keeps them in registers; measured, single primary rays
-// 1-6% faster in a file that also uses the streams), a reference for traverse_pair (whose two
-// walkers in one loop run 2% faster so).
+// no store of the walk changes them and keeps them in registers), a reference for
+// traverse_pair (whose two walkers in one loop are faster so).
 template <Visit visit, bool robust, class T, class Leaf, class Slab = const SlabRay<T>>
 struct Walker {
     using Node = typename BvhTree<T>::Node;
@@ -293,15 +292,11 @@ bool walk_ray(const BvhTree<T>& tree, const SlabRay<T>& r, T& t_max, Leaf& leaf)
 
 // traverse_pair from the rays' slab terms (a non-empty tree): bit 0 when leaf_a stopped ray a,
 // bit 1 when leaf_b stopped ray b. Each walker's node test (hit_children) and the Bvh's leaf
-// tests are always inlined: in this loop of two walkers g++ 12 called them (the random soup's
-// diffuse bounces spent 48% of their samples in take_nearest's calls, 15% in hit_children's),
-// and the pairs ran 0.96× as fast as the same rays one by one there, 1.02× on the trefoil.
-// Inlined (stop 40, same process, medians of 9-11): 0.99-1.05× and 1.10-1.11×; diffuse-bounce
-// streams 0.99-1.06× as fast as before on the five benchmark meshes (g++; clang++ 1.00-1.04×
-// on the soup and the trefoil). How much g++ inlines depends on the translation unit: in
-// vs_embree.cpp (large) it still called lanes_hit, then Sheared8, finish8 and skip_lanes, from
-// the nearest-hit pairs, and test_block from the any-hit walks. So the leaf tests are forced
-// inline down to their lane arithmetic (stop 42; test_block's comment lists them).
+// tests are always inlined: in this loop of two walkers g++ 12 called them out of line, and the
+// calls cost the pairs all they gain over one ray at a time. How much g++ inlines depends on the
+// translation unit (in a large one it called lanes_hit, Sheared8, finish8 and skip_lanes from
+// the nearest-hit pairs), so the leaf tests are forced inline down to their lane arithmetic
+// (test_block's comment lists them).
 template <Visit visit, class T, class LeafA, class LeafB>
 unsigned walk_pair(const BvhTree<T>& tree, const SlabRay<T>& a, T& t_a, LeafA& leaf_a, const SlabRay<T>& b, T& t_b,
                    LeafB& leaf_b) {
@@ -341,9 +336,7 @@ bool traverse(const BvhTree<T>& tree, const Ray<T>& ray, T& t_max, Leaf&& leaf) 
 /// traverse for two rays at once, their steps interleaved: each ray visits the same leaves in
 /// the same order as alone, with the same results, but the two chains of dependent node loads
 /// overlap (for rays that go their own ways: a bounce off a surface, rays of a shuffled stream).
-/// Returns bit 0 when leaf_a stopped ray a, bit 1 when leaf_b stopped ray b. Measured, one
-/// cosine-weighted bounce per camera hit, against traverse one ray after the other (same
-/// process, medians of 9): 1.02-1.09× as fast on the five benchmark meshes.
+/// Returns bit 0 when leaf_a stopped ray a, bit 1 when leaf_b stopped ray b.
 template <Visit visit, class T, class LeafA, class LeafB>
 unsigned traverse_pair(const BvhTree<T>& tree, const Ray<T>& ray_a, T& t_a, LeafA&& leaf_a, const Ray<T>& ray_b, T& t_b,
                        LeafB&& leaf_b) {

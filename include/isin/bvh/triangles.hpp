@@ -2,7 +2,7 @@
 /// isin — triangles in a Bvh's leaves: one block of up to 8 triangles per leaf, stored
 /// structure-of-arrays, and the watertight test (Woop, Benthin & Wald 2013) on all 8 lanes at
 /// once. The lane test is written once over the compiler's vector lanes, with one ISA
-/// specialisation where an A/B run showed it pays (AVX2 + FMA, triangles_avx2.hpp), and a scalar
+/// specialisation where it is faster (AVX2 + FMA, triangles_avx2.hpp), and a scalar
 /// loop for double without AVX2 and for compilers without vector extensions. Every form
 /// computes, lane by lane, what detail::intersect_sheared computes, so a Bvh hits exactly the
 /// triangles intersect_watertight hits.

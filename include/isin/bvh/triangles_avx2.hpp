@@ -1,9 +1,8 @@
 #pragma once
 /// isin — the AVX2 + FMA form of the triangle leaves' lane test (included by triangles.hpp when
-/// the target has both, unless ISIN_FORCE_PURE). Same results as the portable forms; measured
-/// A/B against them on the vs_embree meshes, it is what makes the Bvh's leaves fast: in float,
-/// Kahan's difference of products on 8 lanes costs 4 operations an edge function where exact
-/// products in double cost about 13 (primary rays 5-10% faster).
+/// the target has both, unless ISIN_FORCE_PURE). Same results as the portable forms, and
+/// faster: in float, Kahan's difference of products on 8 lanes costs 4 operations an edge
+/// function where exact products in double cost about 13.
 // Empty unless the target has AVX2 and FMA (and ISIN_FORCE_PURE is not defined).
 #if defined(__AVX2__) && defined(__FMA__) && !defined(ISIN_FORCE_PURE)
 #include <immintrin.h>
