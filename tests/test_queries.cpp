@@ -252,3 +252,106 @@ TEST_CASE_TEMPLATE("Bvh::count_hits: exact ties on a lattice cube, NaN and zero 
     CHECK(bvh.count_hits(isin::Ray<T>{{-1, 1, 1}, {0, 0, 0}}) == 0);
     CHECK(bvh.count_hits(isin::Ray<T>{{-1, 1, 1}, {1, 0, 0}}, nan) == 0);
 }
+
+TEST_CASE_TEMPLATE("Van Oosterom & Strackee: solid angles of an octant and of a cube's face", T, float, double) {
+    // The triangle cutting the first octant's axes subtends 4π/8 from the origin, seen from the
+    // side isin::normal points away from.
+    const isin::Triangle<T> octant{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    const T pi = T(3.14159265358979323846);
+    CHECK(isin::solid_angle(isin::Vertex<T>{0, 0, 0}, octant) == doctest::Approx(double(pi / 2)).epsilon(1e-6));
+    CHECK(isin::solid_angle(isin::Vertex<T>{0, 0, 0}, isin::Triangle<T>{octant.v0, octant.v2, octant.v1}) ==
+          doctest::Approx(double(-pi / 2)).epsilon(1e-6));
+    // A cube's face seen from its centre: 4π/6, two triangles.
+    const isin::Vertex<T> c{T(0.5), T(0.5), T(0.5)};
+    const T face = isin::solid_angle(c, isin::Triangle<T>{{0, 0, 1}, {1, 0, 1}, {1, 1, 1}}) +
+                   isin::solid_angle(c, isin::Triangle<T>{{0, 0, 1}, {1, 1, 1}, {0, 1, 1}});
+    CHECK(std::fabs(face) == doctest::Approx(double(4 * pi / 6)).epsilon(1e-6));
+}
+
+// Points of a closed mesh's box at least `margin` from its surface, with their truth by the
+// exact winding number (of the closed meshes: which side of the surface).
+template <class T>
+std::vector<isin::Vertex<T>> away_from(const isin::Solid<T>& solid, double lo, double hi, double margin, int n,
+                                       std::uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(lo, hi);
+    std::vector<isin::Vertex<T>> points;
+    while (int(points.size()) < n) {
+        const isin::Vertex<T> p{T(u(rng)), T(u(rng)), T(u(rng))};
+        if (solid.bvh().closest_point(p).distance > T(margin)) points.push_back(p);
+    }
+    return points;
+}
+
+TEST_CASE_TEMPLATE("Jacobson 2013: the winding number is 1 inside and 0 outside a closed mesh", T, float, double) {
+    const auto mesh = solids::icosphere<T>(3, {0.3, -0.2, 0.1}, 1.0);
+    const isin::Solid<T> solid{mesh};
+    const isin::Solid<T> exact{mesh, std::numeric_limits<T>::infinity()};
+    const double diag = 2 * std::sqrt(3.0);
+    const auto points = away_from(solid, -1.2, 1.4, 1e-3 * diag, 1500, 3);
+    std::size_t wrong = 0, wrong_fast = 0;
+    const T tol = sizeof(T) == sizeof(float) ? T(1e-4) : T(1e-10);
+    for (const auto& p : points) {
+        // The truth: the parity of exact crossings, along a direction no edge lines up with.
+        const bool inside = solid.bvh().count_hits(isin::Ray<T>{p, {T(0.31), T(0.83), T(-0.47)}}) % 2 == 1;
+        const T w = solid.winding_number_exact(p);
+        if (std::fabs(w - (inside ? T(1) : T(0))) > tol) ++wrong;
+        if (exact.winding_number(p) != exact.winding_number(p, std::numeric_limits<T>::infinity())) ++wrong;
+        if (solid.contains(p) != inside) ++wrong_fast;
+        CHECK(std::fabs(solid.winding_number(p) - w) < T(0.05)); // the far field's error at beta = 2
+    }
+    CHECK(wrong == 0);
+    CHECK(wrong_fast == 0);
+    // The array forms, and signed distances: negative inside, |d| the closest distance.
+    std::vector<std::uint8_t> in(points.size());
+    std::vector<T> sd(points.size());
+    solid.contains(points.data(), points.size(), in.data());
+    solid.signed_distance(points.data(), points.size(), sd.data());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        CHECK(bool(in[i]) == solid.contains(points[i]));
+        CHECK((sd[i] < T(0)) == bool(in[i]));
+        CHECK(std::fabs(sd[i]) == solid.bvh().closest_point(points[i]).distance);
+    }
+    // A lattice cube, 1e-3 inside and outside its faces, edges and corners.
+    const isin::Solid<T> cube{solids::lattice_cube<T>(4)};
+    CHECK(cube.contains({T(0.001), T(0.001), T(0.001)}));
+    CHECK(cube.contains({T(3.999), T(2), T(0.001)}));
+    CHECK_FALSE(cube.contains({T(-0.001), T(2), T(2)}));
+    CHECK_FALSE(cube.contains({T(4.001), T(4.001), T(4.001)}));
+    CHECK(cube.signed_distance({2, 2, 2}) == doctest::Approx(-2.0));
+    CHECK(cube.signed_distance({2, 2, 7}) == doctest::Approx(3.0));
+}
+
+TEST_CASE_TEMPLATE("Jacobson 2013: overlapping spheres count 2, holes about 1/2, NaN and empty", T, float, double) {
+    // Two overlapping closed spheres as one mesh: 2 in the overlap, still inside.
+    const auto a = solids::icosphere<T>(3, {0, 0, 0}, 1.0), b = solids::icosphere<T>(3, {0.8, 0, 0}, 1.0);
+    const isin::Solid<T> both{solids::merged(a, b)};
+    CHECK(both.winding_number_exact({T(0.4), 0, 0}) == doctest::Approx(2.0).epsilon(1e-4));
+    CHECK(both.winding_number({T(0.4), 0, 0}) == doctest::Approx(2.0).epsilon(1e-2));
+    CHECK(both.contains({T(0.4), 0, 0}));
+    CHECK(both.contains({T(-0.5), 0, 0}));
+    CHECK_FALSE(both.contains({T(2.5), 0, 0}));
+    // One-ray parity is wrong in the overlap (4 crossings from outside through both spheres).
+    CHECK(both.bvh().count_hits(isin::Ray<T>{{T(0.4), 0, 0}, {1, 0, 0}}) == 2);
+
+    // A sphere with 2% of its triangles removed: still inside and outside away from the holes.
+    const isin::Solid<T> holed{solids::with_holes(solids::icosphere<T>(4, {0, 0, 0}, 1.0), 0.02)};
+    CHECK(holed.contains({0, 0, 0}));
+    CHECK(holed.winding_number({0, 0, 0}) == doctest::Approx(1.0).epsilon(0.05));
+    CHECK_FALSE(holed.contains({2, 0, 0}));
+    // Half a sphere: 1/2 at its centre.
+    isin::Mesh<T> half;
+    half.positions = a.positions;
+    for (const auto& t : a.indices)
+        if (a.positions[t[0]].z + a.positions[t[1]].z + a.positions[t[2]].z > T(0)) half.indices.push_back(t);
+    const isin::Solid<T> cup{half};
+    CHECK(cup.winding_number_exact({0, 0, 0}) == doctest::Approx(0.5).epsilon(0.02));
+
+    const T nan = std::numeric_limits<T>::quiet_NaN();
+    CHECK_FALSE(both.contains({nan, 0, 0}));
+    CHECK(std::isnan(both.signed_distance({nan, 0, 0})));
+    const isin::Solid<T> empty{isin::Mesh<T>{}};
+    CHECK(empty.winding_number({0, 0, 0}) == 0);
+    CHECK_FALSE(empty.contains({0, 0, 0}));
+    CHECK(empty.signed_distance({0, 0, 0}) == std::numeric_limits<T>::infinity());
+}
