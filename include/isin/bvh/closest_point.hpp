@@ -29,6 +29,19 @@ ISIN_DETAIL_INLINE void box_distances(const typename BvhTree<T>::Node& n, const 
         }
 }
 
+/// Squared distances from p to the boxes of a block's 8 triangles (all lanes, padding too).
+template <class T>
+ISIN_DETAIL_INLINE void triangle_box_distances(const TriangleBlock<T>& b, const T (&p)[3], T (&d2)[8]) noexcept {
+    for (int k = 0; k < 8; ++k) d2[k] = T(0);
+    for (int a = 0; a < 3; ++a)
+        for (int k = 0; k < 8; ++k) {
+            const T lo = std::min(std::min(b.v[0][a][k], b.v[1][a][k]), b.v[2][a][k]);
+            const T hi = std::max(std::max(b.v[0][a][k], b.v[1][a][k]), b.v[2][a][k]);
+            const T gap = std::max(std::max(lo - p[a], p[a] - hi), T(0));
+            d2[k] += gap * gap;
+        }
+}
+
 /// The closest point of the tree's triangles to p within max_distance (PointHit; a miss when
 /// none, or for a NaN or infinite p). Of triangles at the same distance, the lowest index.
 template <class T>
@@ -71,7 +84,10 @@ template <class T>
         }
         const std::uint32_t leaf = e.ref & ~Tree::leaf_bit;
         const typename TriangleBlocks<T>::Block& b = blocks[leaf];
+        T box2[8]; // squared distances to the 8 triangles' boxes: the exact test only where they are in reach
+        triangle_box_distances(b, q, box2);
         for (int k = 0, live = live_lanes(b); k < live; ++k) {
+            if (!(box2[k] <= best2)) continue;
             const Vertex<T> v0{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]};
             const Vertex<T> v1{b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]};
             const Vertex<T> v2{b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]};
