@@ -5,7 +5,7 @@
 #                                programs of their own (label integration); a few minutes on 2 cores.
 #   bash scripts/test.sh --all   what CI runs (.ci/run), about 25 minutes on 2 cores:
 #  1. checks the layout of every C++ file (scripts/format.sh --check, .clang-format);
-#  2. runs the stability, BVH and lane-filter tests (and the BVH stream and, at -march=native, vertex-normal tests) with g++ and clang++ at -O0 and at -O3 -march=native
+#  2. runs the stability, BVH, query and lane-filter tests (and the BVH stream and, at -march=native, vertex-normal tests) with g++ and clang++ at -O0 and at -O3 -march=native
 #     (their guarantees must survive any FMA contraction), on the portable path with no vector
 #     extension or intrinsic (-DISIN_FORCE_PURE=ON), on the AVX path without FMA (g++ -mavx
 #     -mno-fma) and on AVX2 + FMA without AVX-512 (clang++ -march=haswell: the packets' AVX2 form);
@@ -61,8 +61,8 @@ for configuration in "${configurations[@]}"; do
   normals=
   case "$flags" in *march=native*) normals=test_indexed_mesh ;; esac
   extra_tests="$stream${stream:+${normals:+ }}$normals"
-  cmake --build "$dir" -j"$jobs" --target test_stability test_bvh test_ray_lanes $extra_tests
-  ctest --test-dir "$dir" -R "^(test_stability|test_bvh|test_ray_lanes${extra_tests:+|${extra_tests// /|}})\$" --output-on-failure
+  cmake --build "$dir" -j"$jobs" --target test_stability test_bvh test_queries test_ray_lanes $extra_tests
+  ctest --test-dir "$dir" -R "^(test_stability|test_bvh|test_queries|test_ray_lanes${extra_tests:+|${extra_tests// /|}})\$" --output-on-failure
 done
 for preset in gcc sanitize tsan; do
   echo "== isin: $preset" >&2

@@ -10,6 +10,8 @@
 ///  - bvh/triangles.hpp the triangle leaves: blocks of 8, the watertight test on 8 lanes
 ///                      (triangles_avx2.hpp: its AVX2 + FMA form)
 ///  - bvh/triangle_bvh.hpp  Bvh<T>: all of it for triangles, with culling and skip filters
+///  - bvh/closest_point.hpp Bvh::closest_point: the nearest surface point, nearest box first
+///  - bvh/crossings.hpp Bvh::count_hits: crossings counted once through shared edges and vertices
 ///
 ///     isin::Bvh<float> bvh{triangles};          // std::vector<isin::Triangle<float>> or isin::Mesh<float>
 ///     if (auto h = bvh.intersect(ray)) use(h.t, h.u, h.v, h.primitive);
@@ -26,6 +28,8 @@
 ///     });
 #include "bvh/box.hpp"
 #include "bvh/build.hpp"
+#include "bvh/closest_point.hpp"
+#include "bvh/crossings.hpp"
 #include "bvh/packet.hpp"
 #include "bvh/traverse.hpp"
 #include "bvh/tree.hpp"

@@ -26,7 +26,7 @@
 /// Headers, one concept each: vec (§2), ray (§3), hit, camera (§3), triangle (§4, §10),
 /// sphere (§6), color, shading (§7, §8), offset (§9), culling (§11), texture (§10), image,
 /// mesh (OBJ/PLY files), model (meshes with materials and textures from files), scene (§5),
-/// render (§3–§11).
+/// render (§3–§11), point_hit and solid (closest points, inside/outside, signed distance).
 #include "baldwin_weber.hpp"
 #include "batch.hpp"
 #include "bvh.hpp"
@@ -40,11 +40,13 @@
 #include "mesh.hpp"
 #include "model.hpp"
 #include "offset.hpp"
+#include "point_hit.hpp"
 #include "ray.hpp"
 #include "read_limits.hpp"
 #include "render.hpp"
 #include "scene.hpp"
 #include "shading.hpp"
+#include "solid.hpp"
 #include "sphere.hpp"
 #include "texture.hpp"
 #include "transform.hpp"

@@ -12,9 +12,12 @@
 #include "../detail/attributes.hpp"
 #include "../hit.hpp"
 #include "../indexed_mesh.hpp"
+#include "../point_hit.hpp"
 #include "../ray.hpp"
 #include "../triangle.hpp"
 #include "build.hpp"
+#include "closest_point.hpp"
+#include "crossings.hpp"
 #include "packet.hpp"
 #include "traverse.hpp"
 #include "tree.hpp"
@@ -170,6 +173,23 @@ public:
                 return false;
             });
         });
+    }
+
+    /// The closest point of the triangles to p within max_distance (closest_point.hpp); a miss
+    /// when none is, or for a NaN or infinite p.
+    [[nodiscard]] PointHit<T> closest_point(const Vertex<T>& p,
+                                            T max_distance = std::numeric_limits<T>::infinity()) const noexcept {
+        return detail::closest_point(tree_, blocks_, p, max_distance);
+    }
+    /// out[i] = closest_point(points[i]) for i < count, on up to `threads` threads (0 = every core).
+    void closest_point(const Vertex<T>* points, std::size_t count, PointHit<T>* out, int threads = 0) const {
+        detail::closest_points(tree_, blocks_, points, count, out, threads);
+    }
+    /// How many times the ray crosses the triangles with t in (0, t_max), a crossing through a
+    /// shared edge or vertex once (crossings.hpp): even from outside a closed mesh.
+    [[nodiscard]] std::size_t count_hits(const Ray<T>& ray,
+                                         T t_max = std::numeric_limits<T>::infinity()) const noexcept {
+        return detail::count_crossings(tree_, blocks_, ray, t_max);
     }
 
     /// Updates the Bvh after the triangles moved (same count, same order): the boxes and blocks
