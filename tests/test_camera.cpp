@@ -138,8 +138,25 @@ TEST_CASE_TEMPLATE("§3 look_at turns the camera towards a target", T, float, do
     CHECK(cam.up().y > T(0)); // no roll: up stays up
     const auto centre = cam.primary_ray(T(399.5), T(224.5));
     CHECK(centre.direction.y == approx(-0.6));
-    const auto same = isin::Camera<T>::look_at(800, 450, {1, 2, 3}, {1, 2, 3});
-    CHECK(same.forward() == isin::Vertex<T>{0, 0, 1});
+}
+
+TEST_CASE_TEMPLATE("look_at: a non-finite or coincident eye and target are errors, not a camera at the origin", T,
+                   float, double) {
+    const T nan = std::numeric_limits<T>::quiet_NaN(), inf = std::numeric_limits<T>::infinity();
+    const isin::Vertex<T> up{0, 1, 0};
+    const std::pair<isin::Vertex<T>, isin::Vertex<T>> bad[] = {
+        {{nan, 0, 0}, {0, 0, 60}},
+        {{0, 0, 0}, {0, inf, 60}},
+        {{1, 2, 3}, {1, 2, 3}},
+        {{0, 0, -inf}, {0, 0, 0}},
+        {{0, 0, 0}, {nan, nan, nan}},
+        {{0, 0, std::numeric_limits<T>::max()}, {0, 0, -std::numeric_limits<T>::max()}}, // no finite direction
+    };
+    for (const auto& [eye, target] : bad) {
+        CHECK_THROWS_AS((void)isin::Camera<T>::look_at(64, 36, eye, target), std::invalid_argument);
+        CHECK_THROWS_AS((void)isin::Camera<T>::look_at(64, 36, eye, target, up, T(45)), std::invalid_argument);
+    }
+    CHECK_NOTHROW((void)isin::Camera<T>::look_at(64, 36, {0, 0, 0}, {0, T(1e-3), 0}));
 }
 
 TEST_CASE_TEMPLATE("§12 walking: W then S returns to the start", T, float, double) {
@@ -278,13 +295,12 @@ TEST_CASE_TEMPLATE("look_at's up vector rolls the image; a useless up keeps it l
     const auto tilted = isin::Camera<T>::look_at(101, 101, {0, 0, 0}, {0, 0, 10}, {0, 1, 5}, T(60));
     CHECK(tilted.up().y == approx(1));
     CHECK(tilted.roll() == approx(0).epsilon(1e-6));
-    // Up along the view, zero or NaN: level, as look_at without up.
-    for (const isin::Vertex<T> up : {isin::Vertex<T>{0, 0, 3}, isin::Vertex<T>{0, 0, 0},
-                                     isin::Vertex<T>{std::numeric_limits<T>::quiet_NaN(), 1, 0}}) {
-        const auto level = isin::Camera<T>::look_at(101, 101, {0, 0, 0}, {0, 0, 10}, up, T(60));
-        CHECK(level.roll() == T(0));
-        CHECK(level.up().y == approx(1));
-    }
+    // Up along the view, zero or not finite: no image up to take, an error.
+    for (const isin::Vertex<T> up : {isin::Vertex<T>{0, 0, 3}, isin::Vertex<T>{0, 0, -1}, isin::Vertex<T>{0, 0, 0},
+                                     isin::Vertex<T>{std::numeric_limits<T>::quiet_NaN(), 1, 0},
+                                     isin::Vertex<T>{0, std::numeric_limits<T>::infinity(), 0}})
+        CHECK_THROWS_AS((void)isin::Camera<T>::look_at(101, 101, {0, 0, 0}, {0, 0, 10}, up, T(60)),
+                        std::invalid_argument);
     // Walking keeps the roll.
     auto walker = cam;
     walker.turn(T(0.1));

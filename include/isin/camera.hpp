@@ -39,20 +39,25 @@ public:
     }
 
     /// A camera at `eye` turned to look at `target` (yaw and pitch from the direction; no roll).
-    /// If eye and target coincide or are not finite, it looks along +Z.
+    /// Throws std::invalid_argument if eye or target is not finite, or if
+    /// they coincide (or lie so close or so far apart that no direction between them is finite).
     [[nodiscard]] static Camera look_at(int width, int height, const Vertex<T>& eye, const Vertex<T>& target) {
+        if (!is_finite(eye) || !is_finite(target))
+            throw std::invalid_argument("isin::Camera::look_at: the eye or the target is not finite");
         const Vertex<T> d = normalize(target - eye);
+        if (!is_finite(d) || !(dot(d, d) > T(0.5)))
+            throw std::invalid_argument(
+                "isin::Camera::look_at: the eye and the target coincide (no finite view direction)");
         const T yaw = std::atan2(d.x, d.z);                      // +Z → 0, +X → +90°
         const T pitch = std::asin(std::clamp(d.y, T(-1), T(1))); // up is positive
-        return Camera(width, height, eye, d == Vertex<T>{} ? T(0) : yaw, pitch);
+        return Camera(width, height, eye, yaw, pitch);
     }
 
     /// A camera at `eye` looking at `target` with `up` upwards in the image (any vector not along
     /// the view; the image's up is its part perpendicular to the view), with square pixels and
     /// `vfov_degrees` between the centres of the top and bottom rows (the note's camera has
-    /// 2·atan(4.5/10) ≈ 48.46°). Throws std::invalid_argument unless 0 < vfov_degrees < 180.
-    /// If eye and target coincide or are not finite, it looks along +Z; if `up` is zero, not
-    /// finite or along the view, it keeps the image level (no roll).
+    /// 2·atan(4.5/10) ≈ 48.46°). Throws std::invalid_argument unless 0 < vfov_degrees < 180, as
+    /// the 4-argument look_at for eye and target, and if `up` is zero, not finite or along the view.
     [[nodiscard]] static Camera look_at(int width, int height, const Vertex<T>& eye, const Vertex<T>& target,
                                         const Vertex<T>& up, T vfov_degrees) {
         Camera cam = look_at(width, height, eye, target);
@@ -62,8 +67,9 @@ public:
         const Vertex<T> up0 = cross(cam.forward_, right0);
         const Vertex<T> across = up - dot(up, cam.forward_) * cam.forward_; // `up` in the image plane
         const T x = dot(across, right0), y = dot(across, up0), eps = std::numeric_limits<T>::epsilon();
-        if (x * x + y * y > T(64) * eps * eps * dot(up, up)) // NaN, zero or along the view: level
-            cam.set_pose(cam.position_, cam.yaw_, cam.pitch_, std::atan2(x, y));
+        if (!is_finite(up) || !(x * x + y * y > T(64) * eps * eps * dot(up, up))) // NaN, zero or along the view
+            throw std::invalid_argument("isin::Camera::look_at: the up vector is zero, not finite or along the view");
+        cam.set_pose(cam.position_, cam.yaw_, cam.pitch_, std::atan2(x, y));
         return cam;
     }
 
