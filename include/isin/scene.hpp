@@ -67,7 +67,7 @@ struct Object {
 
 // ---- per-kind customisation points ---------------------------------------------------------------
 // A kind of primitive needs `intersect_primitive(ray, shape, TriangleMethod)` (a Hit), `bounds(shape)`
-// (a Box, for its Bvh), `surface_normal(shape, point, hit)` (unit) and `triangle_of(shape)` (its
+// (a Box, for its Bvh; a kind without is tested one by one), `surface_normal(shape, point, hit)` (unit) and `triangle_of(shape)` (its
 // plain triangle for culling, or nullptr); texture_coordinates and hit_point are optional. A user's kind defines
 // them in its own namespace (found by argument-dependent lookup), as tests/test_render.cpp does.
 
@@ -186,6 +186,11 @@ template <class T, class Shape>
 struct has_lane_filter<T, Shape,
                        std::void_t<decltype(may_hit(std::declval<const RayLanes<T>&>(), std::declval<const Shape&>()))>>
     : std::true_type {};
+// Whether kind Shape has a box (bounds), which its Bvh needs: a kind without is tested one by one.
+template <class T, class Shape, class = void>
+struct has_bounds : std::false_type {};
+template <class T, class Shape>
+struct has_bounds<T, Shape, std::void_t<decltype(bounds(std::declval<const Shape&>()))>> : std::true_type {};
 // Whether the built-in kinds' exact test in lanes (ray_lanes.hpp) tests kind Shape.
 template <class T, class Shape, class = void>
 struct has_lane_hits : std::false_type {};
@@ -1140,7 +1145,7 @@ private:
                 if constexpr (is_triangle_kind<Shape>::value)
                     accel.triangles = std::make_shared<const Bvh<T>>(
                         vec.size(), [&vec](std::size_t i) { return *triangle_of(vec[i].shape); }, options);
-                else {
+                else if constexpr (detail::has_bounds<T, Shape>::value) {
                     BvhOptions small_leaves = options;
                     small_leaves.leaf_size = shape_leaf_size;
                     accel.objects = std::make_shared<const BvhTree<T>>(build_bvh<T>(
