@@ -1,5 +1,6 @@
 // Note §3: the ray R(t) = Ro + t·Rd and the pinhole camera with its 16×9 plane at z = 10.
 #include <isin/camera.hpp>
+#include <isin/sphere.hpp>
 
 #include <doctest/doctest.h>
 
@@ -157,6 +158,33 @@ TEST_CASE_TEMPLATE("look_at: a non-finite or coincident eye and target are error
         CHECK_THROWS_AS((void)isin::Camera<T>::look_at(64, 36, eye, target, up, T(45)), std::invalid_argument);
     }
     CHECK_NOTHROW((void)isin::Camera<T>::look_at(64, 36, {0, 0, 0}, {0, T(1e-3), 0}));
+}
+
+TEST_CASE_TEMPLATE("look_at: square pixels in both forms, a sphere ahead renders round; the note's camera is kept", T,
+                   float, double) {
+    const isin::Sphere<T> ball{{0, 0, 50}, 10};
+    for (const auto& [w, h] : {std::pair<int, int>{400, 400}, {120, 40}, {36, 64}}) {
+        CAPTURE(w);
+        CAPTURE(h);
+        for (const bool with_up : {false, true}) {
+            const auto cam = with_up ? isin::Camera<T>::look_at(w, h, {0, 0, 0}, {0, 0, 1}, {0, 1, 0}, T(40))
+                                     : isin::Camera<T>::look_at(w, h, {0, 0, 0}, {0, 0, 1});
+            const T across = isin::length(cam.image_point(T(1), T(0)) - cam.image_point(T(0), T(0)));
+            const T down = isin::length(cam.image_point(T(0), T(1)) - cam.image_point(T(0), T(0)));
+            CHECK(across == approx(down).epsilon(1e-5));
+            // The sphere's extent along the middle row and the middle column, in pixels.
+            int wide = 0, tall = 0;
+            for (int x = 0; x < w; ++x) wide += bool(isin::intersect(cam.primary_ray(T(x), T(h - 1) / 2), ball));
+            for (int y = 0; y < h; ++y) tall += bool(isin::intersect(cam.primary_ray(T(w - 1) / 2, T(y)), ball));
+            CHECK(wide > 2);
+            CHECK(std::abs(wide - tall) <= 1);
+        }
+    }
+    const isin::Camera<T> note{800, 450};
+    CHECK(note.plane_width == T(16));
+    CHECK(note.plane_height == T(9));
+    CHECK(note.plane_distance == T(10));
+    CHECK(note.image_point(T(0), T(0)) == isin::Vertex<T>{-8, T(4.5), 10}); // §3: top-left GD
 }
 
 TEST_CASE_TEMPLATE("§12 walking: W then S returns to the start", T, float, double) {

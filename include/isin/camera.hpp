@@ -18,8 +18,8 @@ namespace isin {
 /// pitch about the camera's right axis, roll about its view direction, radians, left-handed: yaw
 /// +90° turns +Z into +X, roll +90° turns the image's up towards its old right) moves and turns
 /// that whole rig; the plane keeps its size and distance. The note's plane has square pixels only
-/// at 16:9 sizes; set_vertical_fov or square_pixels, or the look_at with an up vector, give square
-/// pixels at any width × height.
+/// at 16:9 sizes; set_vertical_fov or square_pixels, and both look_at forms, give square pixels at
+/// any width × height.
 template <class T>
 class Camera {
     static_assert(std::is_floating_point_v<T>, "isin::Camera needs a floating-point type");
@@ -38,8 +38,9 @@ public:
         set_pose(position, yaw, pitch, roll);
     }
 
-    /// A camera at `eye` turned to look at `target` (yaw and pitch from the direction; no roll).
-    /// Throws std::invalid_argument if eye or target is not finite, or if
+    /// A camera at `eye` turned to look at `target` (yaw and pitch from the direction; no roll),
+    /// the note's 9-high plane at distance 10 with square pixels at any width × height (its
+    /// width 9·(W−1)/(H−1)). Throws std::invalid_argument if eye or target is not finite, or if
     /// they coincide (or lie so close or so far apart that no direction between them is finite).
     [[nodiscard]] static Camera look_at(int width, int height, const Vertex<T>& eye, const Vertex<T>& target) {
         if (!is_finite(eye) || !is_finite(target))
@@ -50,7 +51,9 @@ public:
                 "isin::Camera::look_at: the eye and the target coincide (no finite view direction)");
         const T yaw = std::atan2(d.x, d.z);                      // +Z → 0, +X → +90°
         const T pitch = std::asin(std::clamp(d.y, T(-1), T(1))); // up is positive
-        return Camera(width, height, eye, yaw, pitch);
+        Camera cam(width, height, eye, yaw, pitch);
+        cam.square_pixels();
+        return cam;
     }
 
     /// A camera at `eye` looking at `target` with `up` upwards in the image (any vector not along
