@@ -32,6 +32,7 @@
 #include "color.hpp"
 #include "detail/attributes.hpp"
 #include "detail/compiled.hpp"
+#include "detail/parallel.hpp"
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "indexed_mesh.hpp"
@@ -535,6 +536,21 @@ public:
     void intersect(const RaysSoA<T>& rays, std::size_t count, Hit<T>* hits, const Culled* culled = nullptr) const {
         stream_nearest([&rays](std::size_t i) { return rays[i]; }, count, hits, culled);
     }
+    /// Both stream intersects with the rays shared among options.threads threads (StreamOptions;
+    /// the forms above use the calling thread alone): the same hits for any thread count.
+    void intersect(const Ray<T>* rays, std::size_t count, Hit<T>* hits, const Culled* culled,
+                   const StreamOptions& options) const {
+        in_threads(count, options, [&](std::size_t first, std::size_t end) {
+            stream_nearest(RayArray{rays + first}, end - first, hits + first, culled);
+        });
+    }
+    void intersect(const RaysSoA<T>& rays, std::size_t count, Hit<T>* hits, const Culled* culled,
+                   const StreamOptions& options) const {
+        in_threads(count, options, [&](std::size_t first, std::size_t end) {
+            stream_nearest([&rays, first](std::size_t i) { return rays[first + i]; }, end - first, hits + first,
+                           culled);
+        });
+    }
 
     /// True when any object or placed mesh is hit with t in (0, t_max), whatever its material:
     /// a shadow ray in a scene of opaque objects (transmittance weighs transparent ones).
@@ -561,6 +577,20 @@ public:
     void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked) const {
         stream_occluded([&rays](std::size_t i) { return rays[i]; }, count, t_max, blocked);
     }
+    /// Both stream occluded calls with the rays shared among options.threads threads.
+    void occluded(const Ray<T>* rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
+                  const StreamOptions& options) const {
+        in_threads(count, options, [&](std::size_t first, std::size_t end) {
+            stream_occluded(RayArray{rays + first}, end - first, t_max + first, blocked + first);
+        });
+    }
+    void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
+                  const StreamOptions& options) const {
+        in_threads(count, options, [&](std::size_t first, std::size_t end) {
+            stream_occluded([&rays, first](std::size_t i) { return rays[first + i]; }, end - first, t_max + first,
+                            blocked + first);
+        });
+    }
 
     /// Fraction of light that reaches along `ray` up to t_max: 1 when nothing is in the way, the
     /// product of the transparencies of the objects crossed otherwise (0 for an opaque one, at
@@ -577,7 +607,14 @@ public:
     }
     /// Shadow rays of a stream: through[i] = transmittance(rays[i], t_max[i]) for i < count, the
     /// same values bit for bit. Kinds too small for a Bvh are tested rays × objects in lanes
-    /// (ray_lanes.hpp), the rest ray by ray.
+    /// (ray_lanes.hpp), the rest ray by ray. With `options`, the rays shared among options.threads
+    /// threads (StreamOptions; without, the calling thread alone): the same values for any count.
+    void transmittance(const Ray<T>* rays, std::size_t count, const T* t_max, T* through,
+                       const StreamOptions& options) const {
+        in_threads(count, options, [&](std::size_t first, std::size_t end) {
+            transmittance(rays + first, end - first, t_max + first, through + first);
+        });
+    }
     void transmittance(const Ray<T>* rays, std::size_t count, const T* t_max, T* through) const {
         prepare();
         RayLanes<T> lanes;
@@ -1168,6 +1205,14 @@ private:
             top_ = std::make_shared<const BvhTree<T>>(build_bvh<T>(
                 instances_.size(), [this](std::size_t i) { return instances_[i].box; }, one_per_leaf));
         }
+    }
+
+    // f(first, end) over blocks of a stream of `count` rays on options.threads threads, once the
+    // scene is built (here, not by each thread).
+    template <class F>
+    void in_threads(std::size_t count, const StreamOptions& options, const F& f) const {
+        prepare();
+        detail::parallel_blocks(count, detail::thread_count(options.threads), StreamOptions::block, f);
     }
 
     // Builds what a change since the last build dropped, once: the first of several concurrent
