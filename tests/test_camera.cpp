@@ -163,7 +163,8 @@ TEST_CASE_TEMPLATE("look_at: a non-finite or coincident eye and target are error
 TEST_CASE_TEMPLATE("look_at: square pixels in both forms, a sphere ahead renders round; the note's camera is kept", T,
                    float, double) {
     const isin::Sphere<T> ball{{0, 0, 50}, 10};
-    for (const auto& [w, h] : {std::pair<int, int>{400, 400}, {120, 40}, {36, 64}}) {
+    for (const auto& size : {std::pair<int, int>{400, 400}, {120, 40}, {36, 64}}) {
+        const int w = size.first, h = size.second;
         CAPTURE(w);
         CAPTURE(h);
         for (const bool with_up : {false, true}) {
