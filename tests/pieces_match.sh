@@ -23,7 +23,17 @@ notes_scene) # bands of unequal sizes (90 rows in 7), threads 2 whole and 1 per 
   "$bin/merge_tiles" frame1_merged.ppm top_0001.ppm bottom_0001.ppm
   same frame1.ppm frame1_merged.ppm
   # a missing band is caught
-  if "$bin/merge_tiles" short.ppm band0.ppm band1.ppm --height 90 2>/dev/null; then echo "FAIL: a missing band went unnoticed" >&2; exit 1; fi ;;
+  if "$bin/merge_tiles" short.ppm band0.ppm band1.ppm --height 90 2>/dev/null; then echo "FAIL: a missing band went unnoticed" >&2; exit 1; fi
+  # tiles out of order (bands of 12 and 13 rows swapped), of another width or from another split are refused
+  refused() { if "$bin/merge_tiles" "$@" 2>refused.txt; then echo "FAIL: merge_tiles $* was accepted" >&2; exit 1; fi
+              grep -q "$expect" refused.txt || { echo "FAIL: merge_tiles $* did not say '$expect'" >&2; cat refused.txt >&2; exit 1; }; }
+  expect="out of order" refused swapped.ppm band1.ppm band0.ppm band{2..6}.ppm
+  expect="out of order" refused swapped.ppm band{1..6}.ppm band0.ppm
+  "$bin/notes_scene" --width 120 --height 90 --threads 1 --tile 6/7 --output narrow6.ppm
+  expect="wide" refused mixed.ppm band{0..5}.ppm narrow6.ppm
+  "$bin/notes_scene" --width 160 --height 90 --threads 1 --tile 0/2 --output half0.ppm
+  expect="out of order" refused mixed.ppm half0.ppm band{4..6}.ppm
+  [ ! -e swapped.ppm ] && [ ! -e mixed.ppm ] || { echo "FAIL: a refused merge wrote its output" >&2; exit 1; } ;;
 mesh_view) # PNG bands of a BVH-traced mesh with projected culling; orbit frames
   printf 'v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n' > cube.obj
   "$bin/mesh_view" cube.obj --width 96 --height 54 --cull projected --output whole.png

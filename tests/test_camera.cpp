@@ -1,5 +1,6 @@
 // Note §3: the ray R(t) = Ro + t·Rd and the pinhole camera with its 16×9 plane at z = 10.
 #include <isin/camera.hpp>
+#include <isin/sphere.hpp>
 
 #include <doctest/doctest.h>
 
@@ -138,8 +139,53 @@ TEST_CASE_TEMPLATE("§3 look_at turns the camera towards a target", T, float, do
     CHECK(cam.up().y > T(0)); // no roll: up stays up
     const auto centre = cam.primary_ray(T(399.5), T(224.5));
     CHECK(centre.direction.y == approx(-0.6));
-    const auto same = isin::Camera<T>::look_at(800, 450, {1, 2, 3}, {1, 2, 3});
-    CHECK(same.forward() == isin::Vertex<T>{0, 0, 1});
+}
+
+TEST_CASE_TEMPLATE("look_at: a non-finite or coincident eye and target are errors, not a camera at the origin", T,
+                   float, double) {
+    const T nan = std::numeric_limits<T>::quiet_NaN(), inf = std::numeric_limits<T>::infinity();
+    const isin::Vertex<T> up{0, 1, 0};
+    const std::pair<isin::Vertex<T>, isin::Vertex<T>> bad[] = {
+        {{nan, 0, 0}, {0, 0, 60}},
+        {{0, 0, 0}, {0, inf, 60}},
+        {{1, 2, 3}, {1, 2, 3}},
+        {{0, 0, -inf}, {0, 0, 0}},
+        {{0, 0, 0}, {nan, nan, nan}},
+        {{0, 0, std::numeric_limits<T>::max()}, {0, 0, -std::numeric_limits<T>::max()}}, // no finite direction
+    };
+    for (const auto& [eye, target] : bad) {
+        CHECK_THROWS_AS((void)isin::Camera<T>::look_at(64, 36, eye, target), std::invalid_argument);
+        CHECK_THROWS_AS((void)isin::Camera<T>::look_at(64, 36, eye, target, up, T(45)), std::invalid_argument);
+    }
+    CHECK_NOTHROW((void)isin::Camera<T>::look_at(64, 36, {0, 0, 0}, {0, T(1e-3), 0}));
+}
+
+TEST_CASE_TEMPLATE("look_at: square pixels in both forms, a sphere ahead renders round; the note's camera is kept", T,
+                   float, double) {
+    const isin::Sphere<T> ball{{0, 0, 50}, 10};
+    for (const auto& size : {std::pair<int, int>{400, 400}, {120, 40}, {36, 64}}) {
+        const int w = size.first, h = size.second;
+        CAPTURE(w);
+        CAPTURE(h);
+        for (const bool with_up : {false, true}) {
+            const auto cam = with_up ? isin::Camera<T>::look_at(w, h, {0, 0, 0}, {0, 0, 1}, {0, 1, 0}, T(40))
+                                     : isin::Camera<T>::look_at(w, h, {0, 0, 0}, {0, 0, 1});
+            const T across = isin::length(cam.image_point(T(1), T(0)) - cam.image_point(T(0), T(0)));
+            const T down = isin::length(cam.image_point(T(0), T(1)) - cam.image_point(T(0), T(0)));
+            CHECK(across == approx(down).epsilon(1e-5));
+            // The sphere's extent along the middle row and the middle column, in pixels.
+            int wide = 0, tall = 0;
+            for (int x = 0; x < w; ++x) wide += bool(isin::intersect(cam.primary_ray(T(x), T(h - 1) / 2), ball));
+            for (int y = 0; y < h; ++y) tall += bool(isin::intersect(cam.primary_ray(T(w - 1) / 2, T(y)), ball));
+            CHECK(wide > 2);
+            CHECK(std::abs(wide - tall) <= 1);
+        }
+    }
+    const isin::Camera<T> note{800, 450};
+    CHECK(note.plane_width == T(16));
+    CHECK(note.plane_height == T(9));
+    CHECK(note.plane_distance == T(10));
+    CHECK(note.image_point(T(0), T(0)) == isin::Vertex<T>{-8, T(4.5), 10}); // §3: top-left GD
 }
 
 TEST_CASE_TEMPLATE("§12 walking: W then S returns to the start", T, float, double) {
@@ -278,13 +324,12 @@ TEST_CASE_TEMPLATE("look_at's up vector rolls the image; a useless up keeps it l
     const auto tilted = isin::Camera<T>::look_at(101, 101, {0, 0, 0}, {0, 0, 10}, {0, 1, 5}, T(60));
     CHECK(tilted.up().y == approx(1));
     CHECK(tilted.roll() == approx(0).epsilon(1e-6));
-    // Up along the view, zero or NaN: level, as look_at without up.
-    for (const isin::Vertex<T> up : {isin::Vertex<T>{0, 0, 3}, isin::Vertex<T>{0, 0, 0},
-                                     isin::Vertex<T>{std::numeric_limits<T>::quiet_NaN(), 1, 0}}) {
-        const auto level = isin::Camera<T>::look_at(101, 101, {0, 0, 0}, {0, 0, 10}, up, T(60));
-        CHECK(level.roll() == T(0));
-        CHECK(level.up().y == approx(1));
-    }
+    // Up along the view, zero or not finite: no image up to take, an error.
+    for (const isin::Vertex<T> up : {isin::Vertex<T>{0, 0, 3}, isin::Vertex<T>{0, 0, -1}, isin::Vertex<T>{0, 0, 0},
+                                     isin::Vertex<T>{std::numeric_limits<T>::quiet_NaN(), 1, 0},
+                                     isin::Vertex<T>{0, std::numeric_limits<T>::infinity(), 0}})
+        CHECK_THROWS_AS((void)isin::Camera<T>::look_at(101, 101, {0, 0, 0}, {0, 0, 10}, up, T(60)),
+                        std::invalid_argument);
     // Walking keeps the roll.
     auto walker = cam;
     walker.turn(T(0.1));

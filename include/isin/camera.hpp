@@ -18,8 +18,8 @@ namespace isin {
 /// pitch about the camera's right axis, roll about its view direction, radians, left-handed: yaw
 /// +90° turns +Z into +X, roll +90° turns the image's up towards its old right) moves and turns
 /// that whole rig; the plane keeps its size and distance. The note's plane has square pixels only
-/// at 16:9 sizes; set_vertical_fov or square_pixels, or the look_at with an up vector, give square
-/// pixels at any width × height.
+/// at 16:9 sizes; set_vertical_fov or square_pixels, and both look_at forms, give square pixels at
+/// any width × height.
 template <class T>
 class Camera {
     static_assert(std::is_floating_point_v<T>, "isin::Camera needs a floating-point type");
@@ -38,21 +38,29 @@ public:
         set_pose(position, yaw, pitch, roll);
     }
 
-    /// A camera at `eye` turned to look at `target` (yaw and pitch from the direction; no roll).
-    /// If eye and target coincide or are not finite, it looks along +Z.
+    /// A camera at `eye` turned to look at `target` (yaw and pitch from the direction; no roll),
+    /// the note's 9-high plane at distance 10 with square pixels at any width × height (its
+    /// width 9·(W−1)/(H−1)). Throws std::invalid_argument if eye or target is not finite, or if
+    /// they coincide (or lie so close or so far apart that no direction between them is finite).
     [[nodiscard]] static Camera look_at(int width, int height, const Vertex<T>& eye, const Vertex<T>& target) {
+        if (!is_finite(eye) || !is_finite(target))
+            throw std::invalid_argument("isin::Camera::look_at: the eye or the target is not finite");
         const Vertex<T> d = normalize(target - eye);
+        if (!is_finite(d) || !(dot(d, d) > T(0.5)))
+            throw std::invalid_argument(
+                "isin::Camera::look_at: the eye and the target coincide (no finite view direction)");
         const T yaw = std::atan2(d.x, d.z);                      // +Z → 0, +X → +90°
         const T pitch = std::asin(std::clamp(d.y, T(-1), T(1))); // up is positive
-        return Camera(width, height, eye, d == Vertex<T>{} ? T(0) : yaw, pitch);
+        Camera cam(width, height, eye, yaw, pitch);
+        cam.square_pixels();
+        return cam;
     }
 
     /// A camera at `eye` looking at `target` with `up` upwards in the image (any vector not along
     /// the view; the image's up is its part perpendicular to the view), with square pixels and
     /// `vfov_degrees` between the centres of the top and bottom rows (the note's camera has
-    /// 2·atan(4.5/10) ≈ 48.46°). Throws std::invalid_argument unless 0 < vfov_degrees < 180.
-    /// If eye and target coincide or are not finite, it looks along +Z; if `up` is zero, not
-    /// finite or along the view, it keeps the image level (no roll).
+    /// 2·atan(4.5/10) ≈ 48.46°). Throws std::invalid_argument unless 0 < vfov_degrees < 180, as
+    /// the 4-argument look_at for eye and target, and if `up` is zero, not finite or along the view.
     [[nodiscard]] static Camera look_at(int width, int height, const Vertex<T>& eye, const Vertex<T>& target,
                                         const Vertex<T>& up, T vfov_degrees) {
         Camera cam = look_at(width, height, eye, target);
@@ -62,8 +70,9 @@ public:
         const Vertex<T> up0 = cross(cam.forward_, right0);
         const Vertex<T> across = up - dot(up, cam.forward_) * cam.forward_; // `up` in the image plane
         const T x = dot(across, right0), y = dot(across, up0), eps = std::numeric_limits<T>::epsilon();
-        if (x * x + y * y > T(64) * eps * eps * dot(up, up)) // NaN, zero or along the view: level
-            cam.set_pose(cam.position_, cam.yaw_, cam.pitch_, std::atan2(x, y));
+        if (!is_finite(up) || !(x * x + y * y > T(64) * eps * eps * dot(up, up))) // NaN, zero or along the view
+            throw std::invalid_argument("isin::Camera::look_at: the up vector is zero, not finite or along the view");
+        cam.set_pose(cam.position_, cam.yaw_, cam.pitch_, std::atan2(x, y));
         return cam;
     }
 

@@ -5,6 +5,10 @@
 ///     isin::Model<float> spider = isin::load_model<float>("spider.obj");   // reads spider.mtl, its JPEGs
 ///     isin::Scene<float, isin::Triangle> scene;
 ///     isin::add_model(scene, spider);        // materials, textures, one mesh per group
+///     scene.add_light({{0, 100, -100}});
+///     scene.commit();                        // optional: else the first trace builds the Bvh over the groups
+///     const auto cam = isin::Camera<float>::look_at(800, 450, {0, 40, -120}, {0, 0, 0}, {0, 1, 0}, 50.0f);
+///     isin::write_image(isin::render(scene, cam), "spider.png"); // render.hpp, image_io.hpp
 ///
 /// What is read:
 ///  - OBJ (isin's reader; the .mtl files through tinyobjloader): v, vt, vn, f (polygons of any size), g and o (each name a

@@ -10,14 +10,16 @@
 ///     isin::Scene<float, isin::Sphere> scene;
 ///     auto dragon = scene.add_mesh(mesh, scene.add_material(gold)); // builds its Bvh, places it once
 ///     scene.add_instance(dragon, isin::Transform<float>::translation({30, 0, 0}));
-///     scene.commit();                                               // the Bvh over the placements
+///     scene.commit(); // optional: the first trace after a change builds what is missing, once
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -30,6 +32,7 @@
 #include "color.hpp"
 #include "detail/attributes.hpp"
 #include "detail/compiled.hpp"
+#include "detail/parallel.hpp"
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "indexed_mesh.hpp"
@@ -65,7 +68,7 @@ struct Object {
 
 // ---- per-kind customisation points ---------------------------------------------------------------
 // A kind of primitive needs `intersect_primitive(ray, shape, TriangleMethod)` (a Hit), `bounds(shape)`
-// (a Box, for its Bvh), `surface_normal(shape, point, hit)` (unit) and `triangle_of(shape)` (its
+// (a Box, for its Bvh; a kind without is tested one by one), `surface_normal(shape, point, hit)` (unit) and `triangle_of(shape)` (its
 // plain triangle for culling, or nullptr); texture_coordinates and hit_point are optional. A user's kind defines
 // them in its own namespace (found by argument-dependent lookup), as tests/test_render.cpp does.
 
@@ -184,6 +187,11 @@ template <class T, class Shape>
 struct has_lane_filter<T, Shape,
                        std::void_t<decltype(may_hit(std::declval<const RayLanes<T>&>(), std::declval<const Shape&>()))>>
     : std::true_type {};
+// Whether kind Shape has a box (bounds), which its Bvh needs: a kind without is tested one by one.
+template <class T, class Shape, class = void>
+struct has_bounds : std::false_type {};
+template <class T, class Shape>
+struct has_bounds<T, Shape, std::void_t<decltype(bounds(std::declval<const Shape&>()))>> : std::true_type {};
 // Whether the built-in kinds' exact test in lanes (ray_lanes.hpp) tests kind Shape.
 template <class T, class Shape, class = void>
 struct has_lane_hits : std::false_type {};
@@ -205,7 +213,7 @@ struct is_triangle_kind<TexturedTriangle<T>> : std::true_type {};
 
 /// How a scene finds hits among the objects of one kind ("model no more than a scene needs").
 enum class Acceleration {
-    automatic, ///< by size, once committed: a Bvh from bvh_min (triangles) or shape_bvh_min, TriangleBatch from batch_min
+    automatic, ///< by size, once built (commit() or the first trace): a Bvh from bvh_min (triangles) or shape_bvh_min, TriangleBatch from batch_min
     none,      ///< one object after another
     batch,     ///< triangles: TriangleBatch, Möller–Trumbore over structure-of-arrays, vectorised
     bvh        ///< a Bvh of the kind (triangles: watertight test on blocks of 8)
@@ -271,6 +279,19 @@ struct KindAcceleration {
     std::shared_ptr<const Bvh<T>> triangles;   // triangle kinds
     std::shared_ptr<const BvhTree<T>> objects; // other kinds
     std::shared_ptr<const TriangleBatch<T>> batch;
+};
+
+// Whether a scene changed since its accelerations were built, and the lock under which the first
+// of several concurrent traces builds them. A copy takes the flag and a lock of its own.
+struct CommitState {
+    std::atomic<bool> stale{false};
+    std::mutex lock;
+    CommitState() = default;
+    CommitState(const CommitState& o) noexcept : stale(o.stale.load(std::memory_order_acquire)) {}
+    CommitState& operator=(const CommitState& o) noexcept {
+        stale.store(o.stale.load(std::memory_order_acquire), std::memory_order_release);
+        return *this;
+    }
 };
 } // namespace detail
 
@@ -360,21 +381,22 @@ public:
 
     /// Adds a primitive of one of the scene's kinds with a material index from add_material.
     /// Throws std::out_of_range for an unknown material. The kind's acceleration is rebuilt by
-    /// the next commit(); until then the kind is tested one by one.
+    /// the next commit() or, failing that, by the next trace (intersect, occluded, render, ...).
     template <class Shape>
     void add(const Shape& shape, std::uint32_t material_id) {
         (void)material(material_id);
         constexpr std::size_t kind = index_of<Shape>();
         std::get<kind>(objects_).push_back({shape, material_id});
         std::get<kind>(accel_) = {};
+        commit_state_.stale.store(true, std::memory_order_relaxed);
     }
 
     /// Stores `mesh` (once, however often it is placed), builds its Bvh and places it once, where
     /// it stands. Every triangle has `material`, or, when mesh.material is not empty, material +
     /// mesh.material[i] (ids relative to `material`). Returns the handle for add_instance.
     /// Throws std::invalid_argument for an invalid mesh (Mesh::validate), std::out_of_range for a
-    /// material that does not exist. The Bvh over the placements is built by commit(); until
-    /// then placements are tested one after another.
+    /// material that does not exist. The Bvh over the placements is built by commit() or, failing
+    /// that, by the next trace.
     MeshId add_mesh(Mesh<T> mesh, std::uint32_t material_id, const BvhOptions& options = {}) {
         mesh.validate();
         MeshEntry entry;
@@ -416,46 +438,24 @@ public:
         inst.identity = to_world.is_identity();
         inst.box = world_box(meshes_[id.index].bvh->tree().bounds(), to_world);
         instances_.push_back(inst);
-        top_.reset(); // stale: commit() builds it again
+        top_.reset(); // stale: commit() or the next trace builds it again
+        commit_state_.stale.store(true, std::memory_order_relaxed);
         return InstanceId{static_cast<std::uint32_t>(instances_.size() - 1)};
     }
 
     /// Builds what the sizes call for: a Bvh or batch for each kind (by acceleration, bvh_min,
-    /// shape_bvh_min, batch_min) and the Bvh over the placed meshes. Call it after adding; until
-    /// then the scene tests the new objects and placements one by one. Adding N meshes costs N
-    /// mesh builds (in add_mesh) and one cheap build here, not N rebuilds of everything.
+    /// shape_bvh_min, batch_min) and the Bvh over the placed meshes, with `options` (kept for
+    /// later builds). Optional: the first trace after a change (add, add_mesh, add_instance)
+    /// builds what is missing, once, even when several threads start tracing at the same time;
+    /// commit() lets the build happen before, e.g. outside a timed render. Adding N meshes costs
+    /// N mesh builds (in add_mesh) and one cheap build here, not N rebuilds of everything.
     void commit(const BvhOptions& options = {}) {
-        for_each_kind([&](auto kind, const auto& vec) {
-            using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
-            auto& accel = std::get<kind>(accel_);
-            accel = {};
-            if (uses(Acceleration::bvh, kind, vec.size())) {
-                if constexpr (is_triangle_kind<Shape>::value)
-                    accel.triangles = std::make_shared<const Bvh<T>>(
-                        vec.size(), [&vec](std::size_t i) { return *triangle_of(vec[i].shape); }, options);
-                else {
-                    BvhOptions small_leaves = options;
-                    small_leaves.leaf_size = shape_leaf_size;
-                    accel.objects = std::make_shared<const BvhTree<T>>(build_bvh<T>(
-                        vec.size(), [&vec](std::size_t i) { return bounds(vec[i].shape); }, small_leaves));
-                }
-            } else if constexpr (is_triangle_kind<Shape>::value) {
-                if (uses(Acceleration::batch, kind, vec.size())) {
-                    auto batch = std::make_shared<TriangleBatch<T>>();
-                    batch->reserve(vec.size());
-                    for (const auto& obj : vec) batch->push_back(*triangle_of(obj.shape));
-                    accel.batch = std::move(batch);
-                }
-            }
-        });
-        top_.reset();
-        if (instances_.size() > 1) {
-            BvhOptions one_per_leaf = options; // each placement's own box is tested before its mesh is entered
-            one_per_leaf.leaf_size = 1;
-            top_ = std::make_shared<const BvhTree<T>>(build_bvh<T>(
-                instances_.size(), [this](std::size_t i) { return instances_[i].box; }, one_per_leaf));
-        }
+        commit_options_ = options;
+        build(false);
+        commit_state_.stale.store(false, std::memory_order_release);
     }
+    /// Whether nothing changed since the accelerations were last built (by commit() or a trace).
+    [[nodiscard]] bool committed() const noexcept { return !commit_state_.stale.load(std::memory_order_acquire); }
 
     /// Adds a textured rectangle as the note's two right triangles (§10): corner `v0` (the right
     /// angle, texel (0,0)), `v1` = texel (w,0), `v2` = texel (0,h); the fourth corner is v1 + v2 − v0.
@@ -472,13 +472,13 @@ public:
     [[nodiscard]] const std::vector<Object<Shape>>& objects() const noexcept {
         return std::get<std::vector<Object<Shape>>>(objects_);
     }
-    /// Whether the kind Shape currently has a Bvh (built by commit()).
+    /// Whether the kind Shape currently has a Bvh (built by commit() or the first trace after a change).
     template <class Shape>
     [[nodiscard]] bool has_bvh() const noexcept {
         const auto& accel = std::get<index_of<Shape>()>(accel_);
         return accel.triangles || accel.objects;
     }
-    /// Whether the placements have a Bvh over them (built by commit() from two placements on).
+    /// Whether the placements have a Bvh over them (built as has_bvh's, from two placements on).
     [[nodiscard]] bool has_instance_bvh() const noexcept { return bool(top_); }
     /// Number of objects of all kinds (placed meshes not counted).
     [[nodiscard]] std::size_t size() const noexcept {
@@ -512,9 +512,12 @@ public:
     /// t is visible). The hit's `geometry` says where: a kind (its position in the scene's list)
     /// for an object, whose index is `primitive`; kinds + i for placement i of a mesh, whose
     /// triangle is `primitive`. `culled`, if given, leaves out what it names (the renderer's
-    /// backface culling for primary rays). Throws only what a user's kind throws.
+    /// backface culling for primary rays). Throws only what a user's kind throws, or what building
+    /// a changed scene throws (std::bad_alloc): every trace call first builds what a change since
+    /// the last commit() dropped (see commit).
     [[nodiscard]] Hit<T> intersect(const Ray<T>& ray, T t_max = std::numeric_limits<T>::infinity(),
                                    const Culled* culled = nullptr) const {
+        prepare();
         Hit<T> best;
         T t = t_max;
         for_each_kind([&](auto kind, const auto& vec) { nearest_of_kind(kind, vec, ray, culled, t, best); });
@@ -533,10 +536,26 @@ public:
     void intersect(const RaysSoA<T>& rays, std::size_t count, Hit<T>* hits, const Culled* culled = nullptr) const {
         stream_nearest([&rays](std::size_t i) { return rays[i]; }, count, hits, culled);
     }
+    /// Both stream intersects with the rays shared among options.threads threads (StreamOptions;
+    /// the forms above use the calling thread alone): the same hits for any thread count.
+    void intersect(const Ray<T>* rays, std::size_t count, Hit<T>* hits, const Culled* culled,
+                   const StreamOptions& options) const {
+        in_threads(count, options, [&](std::size_t first, std::size_t end) {
+            stream_nearest(RayArray{rays + first}, end - first, hits + first, culled);
+        });
+    }
+    void intersect(const RaysSoA<T>& rays, std::size_t count, Hit<T>* hits, const Culled* culled,
+                   const StreamOptions& options) const {
+        in_threads(count, options, [&](std::size_t first, std::size_t end) {
+            stream_nearest([&rays, first](std::size_t i) { return rays[first + i]; }, end - first, hits + first,
+                           culled);
+        });
+    }
 
     /// True when any object or placed mesh is hit with t in (0, t_max), whatever its material:
     /// a shadow ray in a scene of opaque objects (transmittance weighs transparent ones).
     [[nodiscard]] bool occluded(const Ray<T>& ray, T t_max) const {
+        prepare();
         bool hit = false;
         for_each_kind([&](auto kind, const auto& vec) {
             if (!hit) hit = occluded_by_kind(kind, vec, ray, t_max);
@@ -558,11 +577,26 @@ public:
     void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked) const {
         stream_occluded([&rays](std::size_t i) { return rays[i]; }, count, t_max, blocked);
     }
+    /// Both stream occluded calls with the rays shared among options.threads threads.
+    void occluded(const Ray<T>* rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
+                  const StreamOptions& options) const {
+        in_threads(count, options, [&](std::size_t first, std::size_t end) {
+            stream_occluded(RayArray{rays + first}, end - first, t_max + first, blocked + first);
+        });
+    }
+    void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
+                  const StreamOptions& options) const {
+        in_threads(count, options, [&](std::size_t first, std::size_t end) {
+            stream_occluded([&rays, first](std::size_t i) { return rays[first + i]; }, end - first, t_max + first,
+                            blocked + first);
+        });
+    }
 
     /// Fraction of light that reaches along `ray` up to t_max: 1 when nothing is in the way, the
     /// product of the transparencies of the objects crossed otherwise (0 for an opaque one, at
     /// which it stops). Every kind and placed mesh goes through its Bvh's all-hits traversal.
     [[nodiscard]] T transmittance(const Ray<T>& ray, T t_max) const {
+        prepare();
         T through = T(1);
         for_each_kind([&](auto kind, const auto& vec) {
             if (through > T(0)) transmit_kind(kind, vec, ray, t_max, through);
@@ -573,8 +607,16 @@ public:
     }
     /// Shadow rays of a stream: through[i] = transmittance(rays[i], t_max[i]) for i < count, the
     /// same values bit for bit. Kinds too small for a Bvh are tested rays × objects in lanes
-    /// (ray_lanes.hpp), the rest ray by ray.
+    /// (ray_lanes.hpp), the rest ray by ray. With `options`, the rays shared among options.threads
+    /// threads (StreamOptions; without, the calling thread alone): the same values for any count.
+    void transmittance(const Ray<T>* rays, std::size_t count, const T* t_max, T* through,
+                       const StreamOptions& options) const {
+        in_threads(count, options, [&](std::size_t first, std::size_t end) {
+            transmittance(rays + first, end - first, t_max + first, through + first);
+        });
+    }
     void transmittance(const Ray<T>* rays, std::size_t count, const T* t_max, T* through) const {
+        prepare();
         RayLanes<T> lanes;
         RayLaneHits<T> exact;
         for (std::size_t first = 0; first < count; first += stream_chunk) {
@@ -938,6 +980,7 @@ private:
     // bounds in the same order and ends with the same hit.
     template <class RayAt>
     void stream_nearest(const RayAt& ray_at, std::size_t count, Hit<T>* hits, const Culled* culled) const {
+        prepare();
         Ray<T> copy[stream_chunk];
         T t[stream_chunk];
         Hit<T> found[stream_chunk];
@@ -1004,6 +1047,7 @@ private:
     // The stream occluded: a ray already blocked goes on with t_max = 0 (nothing to find).
     template <class RayAt>
     void stream_occluded(const RayAt& ray_at, std::size_t count, const T* t_max, std::uint8_t* blocked) const {
+        prepare();
         Ray<T> copy[stream_chunk];
         T limit[stream_chunk];
         std::uint8_t hit[stream_chunk];
@@ -1125,6 +1169,65 @@ private:
         return through;
     }
 
+    // Builds each kind's acceleration and the placements' Bvh with commit_options_; with
+    // only_missing, just those a change dropped (the others are still right).
+    void build(bool only_missing) const {
+        const BvhOptions& options = commit_options_;
+        for_each_kind([&](auto kind, const auto& vec) {
+            using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
+            auto& accel = std::get<kind>(accel_);
+            if (only_missing && (accel.triangles || accel.objects || accel.batch)) return;
+            accel = {};
+            if (uses(Acceleration::bvh, kind, vec.size())) {
+                if constexpr (is_triangle_kind<Shape>::value)
+                    accel.triangles = std::make_shared<const Bvh<T>>(
+                        vec.size(), [&vec](std::size_t i) { return *triangle_of(vec[i].shape); }, options);
+                else if constexpr (detail::has_bounds<T, Shape>::value) {
+                    BvhOptions small_leaves = options;
+                    small_leaves.leaf_size = shape_leaf_size;
+                    accel.objects = std::make_shared<const BvhTree<T>>(build_bvh<T>(
+                        vec.size(), [&vec](std::size_t i) { return bounds(vec[i].shape); }, small_leaves));
+                }
+            } else if constexpr (is_triangle_kind<Shape>::value) {
+                if (uses(Acceleration::batch, kind, vec.size())) {
+                    auto batch = std::make_shared<TriangleBatch<T>>();
+                    batch->reserve(vec.size());
+                    for (const auto& obj : vec) batch->push_back(*triangle_of(obj.shape));
+                    accel.batch = std::move(batch);
+                }
+            }
+        });
+        if (only_missing && top_) return;
+        top_.reset();
+        if (instances_.size() > 1) {
+            BvhOptions one_per_leaf = options; // each placement's own box is tested before its mesh is entered
+            one_per_leaf.leaf_size = 1;
+            top_ = std::make_shared<const BvhTree<T>>(build_bvh<T>(
+                instances_.size(), [this](std::size_t i) { return instances_[i].box; }, one_per_leaf));
+        }
+    }
+
+    // f(first, end) over blocks of a stream of `count` rays on options.threads threads, once the
+    // scene is built (here, not by each thread).
+    template <class F>
+    void in_threads(std::size_t count, const StreamOptions& options, const F& f) const {
+        prepare();
+        detail::parallel_blocks(count, detail::thread_count(options.threads), StreamOptions::block, f);
+    }
+
+    // Builds what a change since the last build dropped, once: the first of several concurrent
+    // traces builds it, the others wait for it; then every trace sees the built scene.
+    void prepare() const {
+        if (!commit_state_.stale.load(std::memory_order_acquire)) return;
+        prepare_locked();
+    }
+    ISIN_DETAIL_COLD void prepare_locked() const {
+        const std::lock_guard<std::mutex> hold(commit_state_.lock);
+        if (!commit_state_.stale.load(std::memory_order_relaxed)) return;
+        build(true);
+        commit_state_.stale.store(false, std::memory_order_release);
+    }
+
     // Whether kind `kind` of n objects is tested with acceleration `a`.
     [[nodiscard]] bool uses(Acceleration a, std::size_t kind, std::size_t n) const noexcept {
         if (triangle_method != TriangleMethod::moller_trumbore) return false;
@@ -1188,10 +1291,13 @@ private:
     }
 
     std::tuple<std::vector<Object<Shapes<T>>>...> objects_;
-    std::tuple<detail::KindAcceleration<T, Shapes<T>>...> accel_;
+    // built by commit() or the first trace after a change (prepare)
+    mutable std::tuple<detail::KindAcceleration<T, Shapes<T>>...> accel_;
     std::vector<MeshEntry> meshes_;
     std::vector<Instance> instances_;
-    std::shared_ptr<const BvhTree<T>> top_; // over instances_' boxes, from two placements on
+    mutable std::shared_ptr<const BvhTree<T>> top_; // over instances_' boxes, from two placements on
+    mutable detail::CommitState commit_state_;
+    BvhOptions commit_options_; // of the last commit(), for the builds of later traces
 };
 
 /// A scene of every built-in kind. Its members and its renderer (render.hpp) are compiled once,

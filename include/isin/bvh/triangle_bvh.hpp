@@ -68,6 +68,18 @@ struct HitFilter {
     const std::uint8_t* skip = nullptr;
 };
 
+/// How a stream call (Bvh's or Scene's intersect, occluded, transmittance over many rays) shares
+/// its rays among threads. The results are the same, bit for bit, for any thread count.
+struct StreamOptions {
+    /// Threads tracing the stream: 1 (the default, as the calls without options) is the calling
+    /// thread alone, as suits a call made from a renderer's or a job system's own workers; 0 is
+    /// every core (std::thread::hardware_concurrency(), as RenderOptions::threads).
+    int threads = 1;
+    /// Rays a thread takes at a time: a multiple of 64, so that every packet and chunk of rays is
+    /// the one a single thread would form.
+    static constexpr std::size_t block = 1024;
+};
+
 /// Bounding volume hierarchy over triangles: binned SAH, 8-wide nodes, leaves of up to 8
 /// triangles tested 8 at a time by the watertight test. Float and double.
 template <class T>
@@ -150,6 +162,28 @@ public:
     void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
                   const HitFilter& filter = {}) const noexcept {
         stream<Visit::any>(rays, count, t_max, nullptr, blocked, filter);
+    }
+
+    /// The stream calls above with the rays shared among options.threads threads (StreamOptions).
+    void intersect(const Ray<T>* rays, std::size_t count, Hit<T>* hits, const HitFilter& filter,
+                   const StreamOptions& options) const {
+        stream_in_threads<Visit::nearest>(rays, count, nullptr, hits, nullptr, filter, options);
+    }
+    void intersect(const Ray<T>* rays, std::size_t count, const T* t_max, Hit<T>* hits, const HitFilter& filter,
+                   const StreamOptions& options) const {
+        stream_in_threads<Visit::nearest>(rays, count, t_max, hits, nullptr, filter, options);
+    }
+    void intersect(const RaysSoA<T>& rays, std::size_t count, const T* t_max, Hit<T>* hits, const HitFilter& filter,
+                   const StreamOptions& options) const {
+        stream_in_threads<Visit::nearest>(rays, count, t_max, hits, nullptr, filter, options);
+    }
+    void occluded(const Ray<T>* rays, std::size_t count, const T* t_max, std::uint8_t* blocked, const HitFilter& filter,
+                  const StreamOptions& options) const {
+        stream_in_threads<Visit::any>(rays, count, t_max, nullptr, blocked, filter, options);
+    }
+    void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
+                  const HitFilter& filter, const StreamOptions& options) const {
+        stream_in_threads<Visit::any>(rays, count, t_max, nullptr, blocked, filter, options);
     }
 
     /// Calls f(index, hit) for every triangle hit with t in (0, t_max), once each, in no
@@ -235,6 +269,26 @@ public:
     }
 
 private:
+    // Rays [first, …) of a stream.
+    [[nodiscard]] static const Ray<T>* rays_from(const Ray<T>* rays, std::size_t first) noexcept {
+        return rays + first;
+    }
+    [[nodiscard]] static RaysSoA<T> rays_from(const RaysSoA<T>& r, std::size_t first) noexcept {
+        return {r.ox + first, r.oy + first, r.oz + first, r.dx + first, r.dy + first, r.dz + first};
+    }
+
+    // stream() over blocks of the rays taken in turn by options.threads threads.
+    template <Visit visit, class Rays>
+    void stream_in_threads(const Rays& rays, std::size_t count, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
+                           const HitFilter& filter, const StreamOptions& options) const {
+        detail::parallel_blocks(count, detail::thread_count(options.threads), StreamOptions::block,
+                                [&](std::size_t first, std::size_t end) {
+                                    stream<visit>(rays_from(rays, first), end - first, t_max ? t_max + first : nullptr,
+                                                  hits ? hits + first : nullptr, blocked ? blocked + first : nullptr,
+                                                  filter);
+                                });
+    }
+
     // f(std::true_type{}) when the filter culls back faces, f(std::false_type{}) otherwise: each
     // leaf test is compiled both ways, so that no walk tests the flag at its leaves.
     template <class F>

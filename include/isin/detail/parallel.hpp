@@ -100,6 +100,25 @@ inline void parallel_chunks(std::size_t n, int threads, std::size_t min_chunk,
     });
 }
 
+/// Calls f(begin, end) over [0, n) in blocks of `block` items (the last may be shorter), taken in
+/// turn from a shared counter by up to `threads` threads (run_workers); on this thread alone when
+/// one thread or one block is all there is.
+inline void parallel_blocks(std::size_t n, int threads, std::size_t block,
+                            FunctionRef<void(std::size_t, std::size_t)> f) {
+    block = std::max<std::size_t>(block, 1);
+    const std::size_t blocks = n / block + (n % block != 0);
+    const std::size_t workers = std::min(std::size_t(std::max(threads, 1)), blocks);
+    if (workers <= 1) {
+        if (n > 0) f(0, n);
+        return;
+    }
+    std::atomic<std::size_t> next{0};
+    run_workers(int(workers), [&](int, const FirstError& error) {
+        for (std::size_t k; !error.failed() && (k = next.fetch_add(1)) < blocks;)
+            f(k * block, std::min(n, (k + 1) * block));
+    });
+}
+
 /// Runs a() on a new thread and b() on this one, then rethrows the first exception of either
 /// once both have finished. When no thread can be started, a() runs here after b().
 inline void fork_join(FunctionRef<void()> a, FunctionRef<void()> b) {
