@@ -19,6 +19,7 @@
 #define ISIN_HAVE_ISATTY 1
 #endif
 
+#include "area_light.hpp"
 #include "camera.hpp"
 #include "color.hpp"
 #include "culling.hpp"
@@ -47,6 +48,13 @@ struct RenderOptions {
     /// note's arithmetic (default), or sRGB, what screens and image viewers expect (pair it with
     /// textures decoded from sRGB: ModelOptions::textures, ImageTexture's encoding).
     ColorEncoding encoding = ColorEncoding::linear;
+    /// Stratified samples per area light (RectLight) per shading point, 1 … max_light_samples.
+    int light_samples = 16;
+    /// Area lights' shadow rays to the corner strata first, to all samples only where those
+    /// disagree (a penumbra); false traces every sample's shadow ray.
+    bool adaptive_light_samples = true;
+    /// The largest light_samples.
+    static constexpr int max_light_samples = 65536;
     /// The largest max_depth: trace() recurses once per bounce, and this many levels fit any
     /// thread's stack (as POV-Ray's max_trace_level, whose limit is also 256).
     static constexpr int max_depth_limit = 256;
@@ -447,6 +455,31 @@ ISIN_DETAIL_NOINLINE void light_term_pass(T* p, std::size_t stride, std::size_t 
 template <class T, template <class> class... S>
 Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shading<T>& s, int depth,
                      const RenderOptions& opt, RenderStats& stats);
+
+// The scene's area lights at the point in lane k (after side_pass), added to its local colour
+// after the point lights', in the lights' order: the same bits for a lane of a stream and for
+// trace()'s one point.
+template <class T, template <class> class... S>
+void rect_lights_into_lanes(const Scene<T, S...>& scene, T* lanes, std::size_t stride, std::size_t k, bool opaque,
+                            const RenderOptions& opt, RenderStats& stats) {
+    using Lanes = ShadingLanes<T>;
+    const auto at = [&](std::size_t f) { return lanes[f * stride + k]; };
+    const LitPoint<T> p{Lanes::vertex(lanes, stride, k, Lanes::px),
+                        Lanes::vertex(lanes, stride, k, Lanes::hx),
+                        Lanes::vertex(lanes, stride, k, Lanes::nx),
+                        Lanes::vertex(lanes, stride, k, Lanes::vx),
+                        at(Lanes::kd),
+                        at(Lanes::ks),
+                        at(Lanes::shininess),
+                        {at(Lanes::cr), at(Lanes::cg), at(Lanes::cb)},
+                        {at(Lanes::sr), at(Lanes::sg), at(Lanes::sb)}};
+    const LightSampling sampling{std::clamp(opt.light_samples, 1, RenderOptions::max_light_samples),
+                                 opt.adaptive_light_samples, opt.shadows, opaque};
+    Color<T> sum = Lanes::local(lanes, stride, k);
+    for (std::size_t i = 0; i < scene.rect_lights.size(); ++i)
+        sum += rect_light_term(scene, scene.rect_lights[i], p, light_seed(p.point, i), sampling, stats.shadow);
+    Lanes::set(lanes, stride, k, Lanes::lr, sum);
+}
 } // namespace detail
 
 /// The colour seen along `ray` (unit direction): nearest hit (§5), Phong with shadows (§7, §9),
@@ -480,6 +513,11 @@ template <class T, template <class> class... S>
             visible = scene.transmittance(Ray<T>{from, light.position - from}, T(1));
         }
         detail::light_term_pass<T, T>(lanes, 1, 0, light.color);
+    }
+    if (!scene.rect_lights.empty()) {
+        bool opaque = true;
+        for (const Material<T>& mat : scene.materials) opaque = opaque && mat.transparency == T(0);
+        detail::rect_lights_into_lanes(scene, lanes, 1, 0, opaque, opt, stats);
     }
     const detail::Shading<T> s = Lanes::shading(lanes, 1, 0, m);
     return detail::end_shading(scene, ray, s, depth, opt, stats);
@@ -629,6 +667,9 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
                 light_term_pass(lanes + k, stride, light - first, scene.lights[light].color);
         first = last;
     }
+    if (!scene.rect_lights.empty())
+        for (std::size_t i = 0; i < std::size_t(count); ++i)
+            rect_lights_into_lanes(scene, lanes, stride, i, opaque, opt, stats);
     // §8: the reflected and the transmitted rays of every point that has them, as two streams.
     Ray<T> next[2][N];
     int counts[2] = {0, 0}, slot[2][N];
@@ -686,7 +727,8 @@ struct RowBand {
 /// camera.width() × rows image: the same pixels, bit for bit, as those rows of a whole render,
 /// so that bands rendered apart (other processes, other machines) can be stacked into the
 /// picture (examples/merge_tiles). On opt.threads threads (fewer if some cannot be started).
-/// Throws std::invalid_argument for samples outside [1, 16], negative threads, max_depth outside
+/// Throws std::invalid_argument for samples outside [1, 16], light_samples outside
+/// [1, max_light_samples], negative threads, max_depth outside
 /// [0, max_depth_limit], rows outside the camera's; std::out_of_range for an object or
 /// material whose material or texture does not exist (Scene::validate); and whatever a worker
 /// threw (e.g. a user primitive, std::bad_alloc), once every worker has stopped.
@@ -696,6 +738,9 @@ template <class T, template <class> class... S>
     if (opt.samples < 1 || opt.samples > 16)
         throw std::invalid_argument("isin::render: samples " + std::to_string(opt.samples) + " is outside [1, 16]");
     if (opt.threads < 0) throw std::invalid_argument("isin::render: threads must not be negative");
+    if (opt.light_samples < 1 || opt.light_samples > RenderOptions::max_light_samples)
+        throw std::invalid_argument("isin::render: light_samples " + std::to_string(opt.light_samples) +
+                                    " is outside [1, " + std::to_string(RenderOptions::max_light_samples) + "]");
     if (opt.max_depth < 0 || opt.max_depth > RenderOptions::max_depth_limit)
         throw std::invalid_argument("isin::render: max_depth " + std::to_string(opt.max_depth) + " is outside [0, " +
                                     std::to_string(RenderOptions::max_depth_limit) + "]");

@@ -46,6 +46,17 @@ struct PointLight {
     Color<T> color{T(1), T(1), T(1)};
 };
 
+/// A rectangular area light: the parallelogram corner + u·edge_u + v·edge_v (u, v in [0,1]), a
+/// light of `color` spread uniformly over it. It shades as the mean, over the rectangle, of what a
+/// PointLight of its colour at each point would give (diffuse, specular and shadow); the renderer
+/// estimates that mean from RenderOptions::light_samples stratified points. It is not seen by rays.
+template <class T>
+struct RectLight {
+    static_assert(std::is_floating_point_v<T>, "isin::RectLight needs a floating-point type");
+    Vertex<T> corner, edge_u, edge_v;
+    Color<T> color{T(1), T(1), T(1)};
+};
+
 /// Diffuse coefficient (§7): N·L for unit N and L (L from the point to the light); negative → 0.
 template <class T>
 [[nodiscard]] constexpr T diffuse_coefficient(const Vertex<T>& N, const Vertex<T>& L) noexcept {
