@@ -529,6 +529,7 @@ template <class T>
 struct Secondary {
     bool reflects = false, transmits = false;
     Ray<T> reflected, transmitted;
+    T reflectance = T(0); // with Material::fresnel: the Fresnel reflectance R at this point
 };
 
 template <class T>
@@ -536,13 +537,15 @@ Secondary<T> secondary_rays(const Ray<T>& ray, const Shading<T>& s, RenderStats&
     const Material<T>& m = *s.m;
     const Vertex<T>& d = ray.direction;
     Secondary<T> out;
-    if (m.reflectivity > T(0)) { // §8: Rd − 2(Rd·N)N from the hit point
+    const bool fresnel = m.fresnel && m.transparency > T(0);
+    if (fresnel) out.reflectance = fresnel_dielectric(dot(d, s.Nf), s.entering ? T(1) / m.ior : m.ior);
+    if (m.reflectivity > T(0) || (fresnel && out.reflectance > T(0))) { // §8: Rd − 2(Rd·N)N from the hit point
         ++stats.reflection;
         Vertex<T> mirrored = reflect(d, s.Ns);
         if (!(dot(mirrored, s.Nf) > T(0))) mirrored = reflect(d, s.Nf); // a shading normal must not send it inside
         out.reflects = true, out.reflected = {s.above, mirrored};
     }
-    if (m.transparency > T(0)) { // §8: straight through (ior = 1) or bent by Snell's law
+    if (m.transparency > T(0) && !(fresnel && out.reflectance >= T(1))) { // §8: straight through or bent by Snell's law
         Vertex<T> dir = d;
         bool reflected = false;
         if (m.ior != T(1)) {
@@ -569,7 +572,11 @@ bool has_secondary(const Material<T>& m, int depth, const RenderOptions& opt) no
 // The colour of a point with secondary rays: its local colour and what they brought back (§8).
 template <class T>
 Color<T> mix_secondary(const Material<T>& m, const Color<T>& local, const Color<T>& reflected,
-                       const Color<T>& transmitted) noexcept {
+                       const Color<T>& transmitted, T reflectance) noexcept {
+    if (m.fresnel && m.transparency > T(0)) { // Fresnel: R·reflected + (1 − R)·transmitted
+        const T share = std::min(T(1), m.reflectivity + m.transparency);
+        return (T(1) - share) * local + share * (reflectance * reflected + (T(1) - reflectance) * transmitted);
+    }
     Color<T> result = std::max(T(0), T(1) - m.reflectivity - m.transparency) * local;
     if (m.reflectivity > T(0)) result += m.reflectivity * reflected;
     if (m.transparency > T(0)) result += m.transparency * transmitted;
@@ -585,7 +592,7 @@ Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shadi
     Color<T> reflected{}, transmitted{};
     if (next.reflects) reflected = trace(scene, next.reflected, depth + 1, opt, stats);
     if (next.transmits) transmitted = trace(scene, next.transmitted, depth + 1, opt, stats);
-    return mix_secondary(*s.m, s.local, reflected, transmitted);
+    return mix_secondary(*s.m, s.local, reflected, transmitted, next.reflectance);
 }
 
 // Secondary rays go as streams down to this depth, then one by one (trace()): each level keeps
@@ -674,6 +681,7 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
     Ray<T> next[2][N];
     int counts[2] = {0, 0}, slot[2][N];
     int mixed[N], mixes = 0; // the points with secondary rays, by lane
+    T reflectance[N];        // their Fresnel reflectances, by ray
     for (int i = 0; i < count; ++i) {
         const int k = shaded[i];
         if (!has_secondary(*material[i], depth, opt)) {
@@ -685,6 +693,7 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
         slot[0][k] = slot[1][k] = -1;
         if (sec.reflects) slot[0][k] = counts[0], next[0][counts[0]++] = sec.reflected;
         if (sec.transmits) slot[1][k] = counts[1], next[1][counts[1]++] = sec.transmitted;
+        reflectance[k] = sec.reflectance;
         mixed[mixes++] = i;
     }
     if (mixes == 0) return;
@@ -699,9 +708,9 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
     for (int j = 0; j < mixes; ++j) {
         const int i = mixed[j], k = shaded[i];
         const Color<T> none{};
-        out[k] =
-            mix_secondary(*material[i], Lanes::local(lanes, stride, std::size_t(i)),
-                          slot[0][k] >= 0 ? back[0][slot[0][k]] : none, slot[1][k] >= 0 ? back[1][slot[1][k]] : none);
+        out[k] = mix_secondary(*material[i], Lanes::local(lanes, stride, std::size_t(i)),
+                               slot[0][k] >= 0 ? back[0][slot[0][k]] : none,
+                               slot[1][k] >= 0 ? back[1][slot[1][k]] : none, reflectance[k]);
     }
 }
 } // namespace detail
