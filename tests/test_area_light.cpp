@@ -36,7 +36,7 @@ struct FloorScene {
     }
     // The mean over the rectangle of kd·(N·L)·colour·visibility at floor point P, by the midpoint
     // rule on gu × gv points; visibility in closed form (the occluder's edge is the line x = 0).
-    [[nodiscard]] double exact(const isin::Vertex<T>& P, int gu = 2048, int gv = 64) const {
+    [[nodiscard]] double exact(const isin::Vertex<T>& P, int gu = 1024, int gv = 16) const {
         double sum = 0;
         const double h = (double(occluder_y) - double(P.y)) / (double(light_y) - double(P.y));
         for (int j = 0; j < gv; ++j)
