@@ -92,6 +92,12 @@ struct LitPoint {
     Color<T> object, highlight;
 };
 
+/// Corner c (0 … 3) of a RectLight: corner, corner + edge_u, corner + edge_v, the far one.
+template <class T>
+[[nodiscard]] inline Vertex<T> light_corner(const RectLight<T>& light, int c) noexcept {
+    return light.corner + ((c & 1) ? light.edge_u : Vertex<T>{}) + ((c & 2) ? light.edge_v : Vertex<T>{});
+}
+
 /// How a RectLight is sampled at one point.
 struct LightSampling {
     int samples = 16;     ///< stratified samples over the rectangle
@@ -100,6 +106,12 @@ struct LightSampling {
     bool opaque = true;   ///< nothing in the scene is transparent: shadow rays through `occluded`
 };
 
+/// Whether rect_light_term traces shadow rays to the corners first (LightSampling::adaptive with
+/// shadows and 8 samples or more).
+[[nodiscard]] inline bool corners_first(const LightSampling& s) noexcept {
+    return s.adaptive && s.shadows && s.samples >= 8;
+}
+
 /// The mean over the rectangle of `light` of a PointLight's Phong term (§7) at p, shadows
 /// included (§9), estimated from s.samples stratified samples seeded by `seed`: the colour it adds
 /// to p's local colour. Shadow rays go to `scene` as a stream (occluded, or transmittance unless
@@ -107,9 +119,12 @@ struct LightSampling {
 /// to the rectangle's four corners are traced first, and when they agree the samples take their
 /// value without rays (as POV-Ray's adaptive area lights): exact outside penumbrae, but an
 /// occluder that hides none or all of the corners and not the rest from p is missed.
+/// `corners`, where given, holds what the shadow rays from p.from to the four corners found
+/// (1 − blocked, or their transmittance): traced by the caller with other points' (a stream).
 template <class T, class SceneT>
 [[nodiscard]] Color<T> rect_light_term(const SceneT& scene, const RectLight<T>& light, const LitPoint<T>& p,
-                                       std::uint64_t seed, const LightSampling& s, std::uint64_t& shadow_rays) {
+                                       std::uint64_t seed, const LightSampling& s, std::uint64_t& shadow_rays,
+                                       const T* corners = nullptr) {
     const LightStrata strata = light_strata(s.samples, length(light.edge_u), length(light.edge_v));
     const int n = strata.nu * strata.nv;
     // A highlight term below 2^-24 of ks is left out: cos^shininess < 2^-24 where cos < 2^(-24/shininess).
@@ -154,20 +169,22 @@ template <class T, class SceneT>
             for (int i = 0; i < m; ++i) diffuse_sum += through[i] * n_dot_l[i], specular_sum += through[i] * spec[i];
         }
     };
-    if (!s.adaptive || !s.shadows || n < 8) {
+    if (!corners_first(LightSampling{n, s.adaptive, s.shadows, s.opaque})) {
         shade(T(-1));
     } else {
         // §9: shadow rays to the rectangle's four corners first; where they agree, the samples
         // take their value (exact for one straight occluding edge, which cuts the rectangle by a line).
-        const Vertex<T> corners[4] = {light.corner, light.corner + light.edge_u, light.corner + light.edge_v,
-                                      light.corner + light.edge_u + light.edge_v};
-        for (int c = 0; c < 4; ++c) rays[c] = {p.from, corners[c] - p.from};
-        shadow_rays += 4u;
-        if (s.opaque) {
-            scene.occluded(rays, 4u, one, blocked);
-            for (int c = 0; c < 4; ++c) through[c] = blocked[c] ? T(0) : T(1);
+        if (corners) {
+            for (int c = 0; c < 4; ++c) through[c] = corners[c];
         } else {
-            scene.transmittance(rays, 4u, one, through);
+            for (int c = 0; c < 4; ++c) rays[c] = {p.from, light_corner(light, c) - p.from};
+            shadow_rays += 4u;
+            if (s.opaque) {
+                scene.occluded(rays, 4u, one, blocked);
+                for (int c = 0; c < 4; ++c) through[c] = blocked[c] ? T(0) : T(1);
+            } else {
+                scene.transmittance(rays, 4u, one, through);
+            }
         }
         const bool agree = through[0] == through[1] && through[0] == through[2] && through[0] == through[3];
         if (agree && through[0] == T(0)) return {T(0), T(0), T(0)}; // umbra: every sample shadowed

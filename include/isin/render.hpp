@@ -459,9 +459,12 @@ Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shadi
 // The scene's area lights at the point in lane k (after side_pass), added to its local colour
 // after the point lights', in the lights' order: the same bits for a lane of a stream and for
 // trace()'s one point.
+// Lights [first, last) only; `corners` (where given): light i's corner c seen from lane k, at
+// corners[(4(i − first) + c)·corner_stride + k].
 template <class T, template <class> class... S>
 void rect_lights_into_lanes(const Scene<T, S...>& scene, T* lanes, std::size_t stride, std::size_t k, bool opaque,
-                            const RenderOptions& opt, RenderStats& stats) {
+                            const RenderOptions& opt, RenderStats& stats, const T* corners = nullptr,
+                            std::size_t corner_stride = 0, std::size_t first = 0, std::size_t last = SIZE_MAX) {
     using Lanes = ShadingLanes<T>;
     const auto at = [&](std::size_t f) { return lanes[f * stride + k]; };
     const LitPoint<T> p{Lanes::vertex(lanes, stride, k, Lanes::px),
@@ -476,8 +479,13 @@ void rect_lights_into_lanes(const Scene<T, S...>& scene, T* lanes, std::size_t s
     const LightSampling sampling{std::clamp(opt.light_samples, 1, RenderOptions::max_light_samples),
                                  opt.adaptive_light_samples, opt.shadows, opaque};
     Color<T> sum = Lanes::local(lanes, stride, k);
-    for (std::size_t i = 0; i < scene.rect_lights.size(); ++i)
-        sum += rect_light_term(scene, scene.rect_lights[i], p, light_seed(p.point, i), sampling, stats.shadow);
+    for (std::size_t i = first; i < std::min(last, scene.rect_lights.size()); ++i) {
+        T seen[4];
+        if (corners)
+            for (std::size_t c = 0; c < 4; ++c) seen[c] = corners[(4 * (i - first) + c) * corner_stride + k];
+        sum += rect_light_term(scene, scene.rect_lights[i], p, light_seed(p.point, i), sampling, stats.shadow,
+                               corners ? seen : nullptr);
+    }
     Lanes::set(lanes, stride, k, Lanes::lr, sum);
 }
 } // namespace detail
@@ -674,9 +682,43 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
                 light_term_pass(lanes + k, stride, light - first, scene.lights[light].color);
         first = last;
     }
-    if (!scene.rect_lights.empty())
-        for (std::size_t i = 0; i < std::size_t(count); ++i)
-            rect_lights_into_lanes(scene, lanes, stride, i, opaque, opt, stats);
+    if (!scene.rect_lights.empty()) {
+        // §9: with adaptive sampling, the shadow rays to each area light's corners first, as a
+        // stream per corner (coherent as a point light's), up to a few lights at a time.
+        const LightSampling sampling{std::clamp(opt.light_samples, 1, RenderOptions::max_light_samples),
+                                     opt.adaptive_light_samples, opt.shadows, opaque};
+        constexpr std::size_t lights_at_once = 2;
+        const std::size_t rect_lights = scene.rect_lights.size();
+        for (std::size_t first = 0; first < rect_lights; first += lights_at_once) {
+            const std::size_t last = std::min(rect_lights, first + lights_at_once);
+            T corners[4 * lights_at_once * N];
+            const bool traced = corners_first(sampling) && count > 0;
+            if (traced) {
+                Ray<T> corner_rays[4 * lights_at_once * N];
+                T one[4 * lights_at_once * N];
+                std::size_t m = 0;
+                for (std::size_t i = first; i < last; ++i)
+                    for (int c = 0; c < 4; ++c) {
+                        const Vertex<T> q = light_corner(scene.rect_lights[i], c);
+                        for (int k = 0; k < count; ++k) {
+                            const Vertex<T> o{from[0][k], from[1][k], from[2][k]};
+                            one[m] = T(1), corner_rays[m++] = {o, q - o};
+                        }
+                    }
+                stats.shadow += std::uint64_t(m);
+                if (opaque) {
+                    std::uint8_t blocked[4 * lights_at_once * N];
+                    scene.occluded(corner_rays, m, one, blocked);
+                    for (std::size_t j = 0; j < m; ++j) corners[j] = blocked[j] ? T(0) : T(1);
+                } else {
+                    scene.transmittance(corner_rays, m, one, corners);
+                }
+            }
+            for (std::size_t i = 0; i < std::size_t(count); ++i)
+                rect_lights_into_lanes(scene, lanes, stride, i, opaque, opt, stats, traced ? corners : nullptr,
+                                       std::size_t(count), first, last);
+        }
+    }
     // §8: the reflected and the transmitted rays of every point that has them, as two streams.
     Ray<T> next[2][N];
     int counts[2] = {0, 0}, slot[2][N];
