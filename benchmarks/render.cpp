@@ -182,17 +182,65 @@ isin::Scene<float, isin::Sphere, isin::Triangle> knot_scene() {
     return scene;
 }
 
+/// Soft shadows' cost: the note's scene with its point lights, then with each replaced by a 2×2
+/// RectLight at `samples` samples, uniform and adaptive (renders interleaved, medians); prints the
+/// times, the ratios to the point lights and the shadow rays.
+void area_lights(int threads, int samples, int repeats) {
+    const auto points = note_scene::make<float>();
+    const auto rects = note_scene::with_area_lights(note_scene::make<float>(), 2.0f);
+    const isin::Camera<float> camera{800, 450};
+    isin::RenderOptions opt;
+    opt.threads = threads;
+    opt.progress = false;
+    opt.light_samples = samples;
+    std::vector<double> ms[3];
+    std::uint64_t shadow[3] = {};
+    for (int i = 0; i < repeats; ++i)
+        for (int k = 0; k < 3; ++k) {
+            isin::RenderStats stats;
+            opt.adaptive_light_samples = k == 2;
+            (void)isin::render(k == 0 ? points : rects, camera, opt, &stats);
+            ms[k].push_back(stats.seconds * 1e3);
+            shadow[k] = stats.shadow;
+        }
+    double median[3];
+    for (int k = 0; k < 3; ++k) {
+        std::sort(ms[k].begin(), ms[k].end());
+        median[k] = ms[k][ms[k].size() / 2];
+    }
+    std::printf("%7d %7d %10.1f %10.1f (%5.2fx) %10.1f (%5.2fx) %12llu %12llu %12llu\n", threads, samples, median[0],
+                median[1], median[1] / median[0], median[2], median[2] / median[0],
+                static_cast<unsigned long long>(shadow[0]), static_cast<unsigned long long>(shadow[1]),
+                static_cast<unsigned long long>(shadow[2]));
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     int repeats = 9;
+    bool area_only = false;
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--repeats") == 0 && i + 1 < argc)
             repeats = std::max(1, std::atoi(argv[++i]));
+        else if (std::strcmp(argv[i], "--area-lights") == 0)
+            area_only = true;
         else {
-            std::printf("usage: render [--repeats N]\nTimes the note's scene at 800×450 (median of N renders).\n");
+            std::printf("usage: render [--repeats N] [--area-lights]\nTimes the note's scene at 800×450 (median of N "
+                        "renders); --area-lights times its soft shadows only.\n");
             return std::strcmp(argv[i], "--help") == 0 ? 0 : 2;
         }
+    }
+    const auto soft_shadows = [&] {
+        std::printf("\nsoft shadows: the note's scene, 800x450, point lights against 2x2 RectLights, median of %d "
+                    "interleaved renders\n%7s %7s %10s %20s %20s %12s %12s %12s\n",
+                    repeats, "threads", "samples", "points ms", "uniform ms", "adaptive ms", "shadow rays", "uniform",
+                    "adaptive");
+        for (int samples : {4, 16, 64}) area_lights(1, samples, repeats);
+        area_lights(2, 16, repeats);
+    };
+    if (area_only) {
+        soft_shadows();
+        return 0;
     }
     std::printf("note's scene, 800×450, one ray per pixel, %d renders each, %u hardware threads\n", repeats,
                 std::thread::hardware_concurrency());
@@ -215,5 +263,6 @@ int main(int argc, char** argv) {
                 "interleaved renders, 800×450, depth 1\n",
                 repeats);
     for (int threads : {1, 2}) smooth_shading(threads, repeats);
+    soft_shadows();
     return 0;
 }

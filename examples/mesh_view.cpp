@@ -26,7 +26,8 @@ const char* usage =
     "usage: mesh_view MODEL.obj|MODEL.ply [--output mesh_view.png] [--width 800] [--height 450] [--size WxH]\n"
     "                 [--eye X,Y,Z] [--target X,Y,Z] [--up X,Y,Z] [--fov DEGREES] [--srgb]\n"
     "                 [--smooth ANGLE | --flat] [--threads N] [--samples N] [--cull none|dot|projected]\n"
-    "                 [--frames A..B] [--tile I/N]\n"
+    "                 [--frames A..B] [--tile I/N] [--area-light S] [--light-samples N]\n"
+    "                 [--uniform-light-samples] [--fresnel]\n"
     "Renders a model as its file describes it (isin::load_model): every group, the materials and\n"
     "textures of an OBJ's .mtl files, vertex normals (smooth Phong shading, with the fix for the\n"
     "shadow terminator), texture coordinates and PLY vertex colours; models without materials\n"
@@ -46,7 +47,11 @@ const char* usage =
     "                    is the still picture), each to OUTPUT with its number: a %d or %04d in it is\n"
     "                    replaced, else _NNNN goes before the extension\n"
     "  --tile I/N        band I (from 0) of N bands of rows only, exactly those rows of the whole\n"
-    "                    picture: merge_tiles stacks them\n";
+    "                    picture: merge_tiles stacks them\n"
+    "  --area-light S    each light an S×S rectangle (S in radii of the model): soft shadows\n"
+    "  --light-samples N samples per rectangle per point (default 16; adaptive: more only in\n"
+    "                    penumbrae, unless --uniform-light-samples)\n"
+    "  --fresnel         transparent materials split their light by Fresnel's equations\n";
 
 [[noreturn]] void fail(const std::string& why) { example::fail("mesh_view", why, usage); }
 
@@ -86,7 +91,8 @@ int main(int argc, char** argv) {
     bool flat = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (example::common_option(i, argc, argv, o, usage)) continue;
+        if (example::common_option(i, argc, argv, o, usage) || example::lighting_option(i, argc, argv, o, usage))
+            continue;
         if (a == "--cull") {
             const std::string c = example::string_option(i, argc, argv, usage);
             if (c == "none")
@@ -182,6 +188,7 @@ int main(int argc, char** argv) {
                                      {middle.x + r4, y, middle.z - r4}, scene.add_material(floor));
         scene.add_light({middle + radius * isin::Vec3f{-2.5f, 4.0f, -1.5f}, {0.8f, 0.8f, 0.75f}}); // §9
         scene.add_light({centre + view + radius * isin::Vec3f{1.0f, 0.5f, 0.0f}, {0.35f, 0.35f, 0.4f}});
+        example::apply_lighting(scene, o, opt, radius); // --area-light in radii of the model
         scene.commit();
 
         const int first = o.frames.given() ? o.frames.first : 0, last = o.frames.given() ? o.frames.last : 0;

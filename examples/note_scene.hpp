@@ -4,6 +4,8 @@
 // lights that cast shadows (§9). Shared by examples/notes_scene, the render test and the benchmark.
 #include <isin/isin.hpp>
 
+#include "soft_lights.hpp"
+
 namespace note_scene {
 
 template <class T>
@@ -51,6 +53,14 @@ Scene<T> make(bool textured_floor = true) {
     // §9: both cast shadows: one high above, one low in front (it lights red U, which faces down).
     scene.add_light({{-60, 150, 40}, {T(0.75), T(0.75), T(0.72)}});
     scene.add_light({{80, -10, -30}, {T(0.55), T(0.52), T(0.48)}});
+    return scene;
+}
+
+/// The scene with each point light replaced by a horizontal size × size RectLight of its colour
+/// centred on it (soft shadows); size ≤ 0 leaves the point lights.
+template <class T>
+Scene<T> with_area_lights(Scene<T> scene, T size) {
+    example::to_area_lights(scene, size);
     return scene;
 }
 

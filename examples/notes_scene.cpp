@@ -27,18 +27,23 @@ isin::Camera<float> path_camera(int width, int height, int frame) {
 
 int main(int argc, char** argv) {
     const char* usage = "usage: notes_scene [--width 800] [--height 450] [--output notes_scene.png] [--threads N]\n"
-                        "                   [--samples N] [--frames A..B] [--tile I/N]\n"
+                        "                   [--samples N] [--frames A..B] [--tile I/N] [--area-light S]\n"
+                        "                   [--light-samples N] [--uniform-light-samples] [--fresnel]\n"
                         "Renders the note's scene (triangles of example 5a, mirror and glass spheres, a textured\n"
                         "floor, two lights with shadows). --threads 0 uses every core; --samples N traces N×N\n"
                         "rays per pixel; the output format follows the extension (.png or .ppm).\n"
                         "--frames A..B renders frames A to B of a camera path (a 240-frame loop swaying across the\n"
                         "scene; frame 0 is the still picture), each to OUTPUT with its number: a %d or %04d in it\n"
                         "is replaced, else _NNNN goes before the extension. --tile I/N renders band I (from 0) of\n"
-                        "N bands of rows only, exactly those rows of the whole picture: merge_tiles stacks them.\n";
-    auto o = example::parse(argc, argv, usage, "notes_scene.png", 1000000);
+                        "N bands of rows only, exactly those rows of the whole picture: merge_tiles stacks them.\n"
+                        "--area-light S replaces each light by an S×S rectangle (soft shadows), sampled\n"
+                        "--light-samples N times per point (default 16; adaptive: more only in penumbrae, unless\n"
+                        "--uniform-light-samples); --fresnel splits the glass's light by Fresnel's equations.\n";
+    auto o = example::parse(argc, argv, usage, "notes_scene.png", 1000000, 1, true);
     try {
-        const auto scene = note_scene::make<float>();
+        auto scene = note_scene::make<float>();
         isin::RenderOptions opt;
+        example::apply_lighting(scene, o, opt, 1.0f);
         opt.threads = o.threads;
         opt.samples = o.samples;
         const int first = o.frames.given() ? o.frames.first : 0, last = o.frames.given() ? o.frames.last : 0;

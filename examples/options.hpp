@@ -12,6 +12,8 @@
 #include <isin/image_io.hpp>
 #include <isin/render.hpp>
 
+#include "soft_lights.hpp"
+
 namespace example {
 
 /// Prints "PROGRAM: why" and the usage to stderr and exits with status 2.
@@ -123,7 +125,44 @@ struct Options {
     std::string tile_text, frames_text; // read once the height is known (options come in any order)
     Tile tile;
     FrameRange frames;
+    double area_light = 0;       // --area-light: side of the RectLights replacing the point lights (0: none)
+    int light_samples = 16;      // --light-samples
+    bool uniform_lights = false; // --uniform-light-samples: no adaptive sampling
+    bool fresnel = false;        // --fresnel: transparent materials split light by Fresnel's equations
 };
+
+/// Reads option argv[i] into `o` if it is one of the lighting options (--area-light SIZE,
+/// --light-samples N, --uniform-light-samples, --fresnel); returns false for any other.
+inline bool lighting_option(int& i, int argc, char** argv, Options& o, const char* usage) {
+    const std::string a = argv[i];
+    if (a == "--area-light") {
+        const std::string text = string_option(i, argc, argv, usage);
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (text.empty() || *end != '\0' || !(v >= 0 && v <= 1e6))
+            fail(argv[0], "--area-light must be a size in [0, 1e6], got '" + text + "'", usage);
+        o.area_light = v;
+    } else if (a == "--light-samples")
+        o.light_samples = integer_option(i, argc, argv, 1, isin::RenderOptions::max_light_samples, usage);
+    else if (a == "--uniform-light-samples")
+        o.uniform_lights = true;
+    else if (a == "--fresnel")
+        o.fresnel = true;
+    else
+        return false;
+    return true;
+}
+
+/// Applies the lighting options to `scene` and `opt`: point lights to RectLights of side
+/// o.area_light·scale, the light samples, Fresnel on every transparent material.
+template <class SceneT, class T>
+void apply_lighting(SceneT& scene, const Options& o, isin::RenderOptions& opt, T scale) {
+    to_area_lights(scene, T(o.area_light) * scale);
+    opt.light_samples = o.light_samples;
+    opt.adaptive_light_samples = !o.uniform_lights;
+    if (o.fresnel)
+        for (auto& m : scene.materials) m.fresnel = m.transparency > T(0);
+}
 
 /// Reads option argv[i] into `o` if it is one of the common ones (--width, --height, --threads,
 /// --samples, --output, --help, and with `pieces` --tile and --frames); returns false for any
@@ -165,13 +204,15 @@ inline void finish(Options& o, const char* program, const char* usage, int max_f
 
 /// Parses the common options (common_option, finish), --tile and --frames with frames up to
 /// `max_frame` when it is ≥ 0; `usage` is printed for --help (to stdout, status 0) and on errors
-/// (stderr, status 2). The output must take an image `width_factor`·width × height.
+/// (stderr, status 2). The output must take an image `width_factor`·width × height. With
+/// `lighting`, the lighting options too (lighting_option).
 inline Options parse(int argc, char** argv, const char* usage, const std::string& default_output, int max_frame = -1,
-                     int width_factor = 1) {
+                     int width_factor = 1, bool lighting = false) {
     Options o;
     o.output = default_output;
     for (int i = 1; i < argc; ++i)
-        if (!common_option(i, argc, argv, o, usage, max_frame >= 0))
+        if (!common_option(i, argc, argv, o, usage, max_frame >= 0) &&
+            !(lighting && lighting_option(i, argc, argv, o, usage)))
             fail(argv[0], "unknown option '" + std::string(argv[i]) + "'", usage);
     finish(o, argv[0], usage, max_frame, width_factor);
     return o;

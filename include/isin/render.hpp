@@ -19,6 +19,7 @@
 #define ISIN_HAVE_ISATTY 1
 #endif
 
+#include "area_light.hpp"
 #include "camera.hpp"
 #include "color.hpp"
 #include "culling.hpp"
@@ -47,6 +48,13 @@ struct RenderOptions {
     /// note's arithmetic (default), or sRGB, what screens and image viewers expect (pair it with
     /// textures decoded from sRGB: ModelOptions::textures, ImageTexture's encoding).
     ColorEncoding encoding = ColorEncoding::linear;
+    /// Stratified samples per area light (RectLight) per shading point, 1 … max_light_samples.
+    int light_samples = 16;
+    /// Area lights' shadow rays to the corner strata first, to all samples only where those
+    /// disagree (a penumbra); false traces every sample's shadow ray.
+    bool adaptive_light_samples = true;
+    /// The largest light_samples.
+    static constexpr int max_light_samples = 65536;
     /// The largest max_depth: trace() recurses once per bounce, and this many levels fit any
     /// thread's stack (as POV-Ray's max_trace_level, whose limit is also 256).
     static constexpr int max_depth_limit = 256;
@@ -447,6 +455,39 @@ ISIN_DETAIL_NOINLINE void light_term_pass(T* p, std::size_t stride, std::size_t 
 template <class T, template <class> class... S>
 Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shading<T>& s, int depth,
                      const RenderOptions& opt, RenderStats& stats);
+
+// The scene's area lights at the point in lane k (after side_pass), added to its local colour
+// after the point lights', in the lights' order: the same bits for a lane of a stream and for
+// trace()'s one point.
+// Lights [first, last) only; `corners` (where given): light i's corner c seen from lane k, at
+// corners[(4(i − first) + c)·corner_stride + k].
+template <class T, template <class> class... S>
+void rect_lights_into_lanes(const Scene<T, S...>& scene, T* lanes, std::size_t stride, std::size_t k, bool opaque,
+                            const RenderOptions& opt, RenderStats& stats, const T* corners = nullptr,
+                            std::size_t corner_stride = 0, std::size_t first = 0, std::size_t last = SIZE_MAX) {
+    using Lanes = ShadingLanes<T>;
+    const auto at = [&](std::size_t f) { return lanes[f * stride + k]; };
+    const LitPoint<T> p{Lanes::vertex(lanes, stride, k, Lanes::px),
+                        Lanes::vertex(lanes, stride, k, Lanes::hx),
+                        Lanes::vertex(lanes, stride, k, Lanes::nx),
+                        Lanes::vertex(lanes, stride, k, Lanes::vx),
+                        at(Lanes::kd),
+                        at(Lanes::ks),
+                        at(Lanes::shininess),
+                        {at(Lanes::cr), at(Lanes::cg), at(Lanes::cb)},
+                        {at(Lanes::sr), at(Lanes::sg), at(Lanes::sb)}};
+    const LightSampling sampling{std::clamp(opt.light_samples, 1, RenderOptions::max_light_samples),
+                                 opt.adaptive_light_samples, opt.shadows, opaque};
+    Color<T> sum = Lanes::local(lanes, stride, k);
+    for (std::size_t i = first; i < std::min(last, scene.rect_lights.size()); ++i) {
+        T seen[4];
+        if (corners)
+            for (std::size_t c = 0; c < 4; ++c) seen[c] = corners[(4 * (i - first) + c) * corner_stride + k];
+        sum += rect_light_term(scene, scene.rect_lights[i], p, light_seed(p.point, i), sampling, stats.shadow,
+                               corners ? seen : nullptr);
+    }
+    Lanes::set(lanes, stride, k, Lanes::lr, sum);
+}
 } // namespace detail
 
 /// The colour seen along `ray` (unit direction): nearest hit (§5), Phong with shadows (§7, §9),
@@ -481,6 +522,11 @@ template <class T, template <class> class... S>
         }
         detail::light_term_pass<T, T>(lanes, 1, 0, light.color);
     }
+    if (!scene.rect_lights.empty()) {
+        bool opaque = true;
+        for (const Material<T>& mat : scene.materials) opaque = opaque && mat.transparency == T(0);
+        detail::rect_lights_into_lanes(scene, lanes, 1, 0, opaque, opt, stats);
+    }
     const detail::Shading<T> s = Lanes::shading(lanes, 1, 0, m);
     return detail::end_shading(scene, ray, s, depth, opt, stats);
 }
@@ -491,6 +537,7 @@ template <class T>
 struct Secondary {
     bool reflects = false, transmits = false;
     Ray<T> reflected, transmitted;
+    T reflectance = T(0); // with Material::fresnel: the Fresnel reflectance R at this point
 };
 
 template <class T>
@@ -498,13 +545,15 @@ Secondary<T> secondary_rays(const Ray<T>& ray, const Shading<T>& s, RenderStats&
     const Material<T>& m = *s.m;
     const Vertex<T>& d = ray.direction;
     Secondary<T> out;
-    if (m.reflectivity > T(0)) { // §8: Rd − 2(Rd·N)N from the hit point
+    const bool fresnel = m.fresnel && m.transparency > T(0);
+    if (fresnel) out.reflectance = fresnel_dielectric(dot(d, s.Nf), s.entering ? T(1) / m.ior : m.ior);
+    if (m.reflectivity > T(0) || (fresnel && out.reflectance > T(0))) { // §8: Rd − 2(Rd·N)N from the hit point
         ++stats.reflection;
         Vertex<T> mirrored = reflect(d, s.Ns);
         if (!(dot(mirrored, s.Nf) > T(0))) mirrored = reflect(d, s.Nf); // a shading normal must not send it inside
         out.reflects = true, out.reflected = {s.above, mirrored};
     }
-    if (m.transparency > T(0)) { // §8: straight through (ior = 1) or bent by Snell's law
+    if (m.transparency > T(0) && !(fresnel && out.reflectance >= T(1))) { // §8: straight through or bent by Snell's law
         Vertex<T> dir = d;
         bool reflected = false;
         if (m.ior != T(1)) {
@@ -531,7 +580,11 @@ bool has_secondary(const Material<T>& m, int depth, const RenderOptions& opt) no
 // The colour of a point with secondary rays: its local colour and what they brought back (§8).
 template <class T>
 Color<T> mix_secondary(const Material<T>& m, const Color<T>& local, const Color<T>& reflected,
-                       const Color<T>& transmitted) noexcept {
+                       const Color<T>& transmitted, T reflectance) noexcept {
+    if (m.fresnel && m.transparency > T(0)) { // Fresnel: R·reflected + (1 − R)·transmitted
+        const T share = std::min(T(1), m.reflectivity + m.transparency);
+        return (T(1) - share) * local + share * (reflectance * reflected + (T(1) - reflectance) * transmitted);
+    }
     Color<T> result = std::max(T(0), T(1) - m.reflectivity - m.transparency) * local;
     if (m.reflectivity > T(0)) result += m.reflectivity * reflected;
     if (m.transparency > T(0)) result += m.transparency * transmitted;
@@ -547,7 +600,7 @@ Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shadi
     Color<T> reflected{}, transmitted{};
     if (next.reflects) reflected = trace(scene, next.reflected, depth + 1, opt, stats);
     if (next.transmits) transmitted = trace(scene, next.transmitted, depth + 1, opt, stats);
-    return mix_secondary(*s.m, s.local, reflected, transmitted);
+    return mix_secondary(*s.m, s.local, reflected, transmitted, next.reflectance);
 }
 
 // Secondary rays go as streams down to this depth, then one by one (trace()): each level keeps
@@ -629,10 +682,48 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
                 light_term_pass(lanes + k, stride, light - first, scene.lights[light].color);
         first = last;
     }
+    if (!scene.rect_lights.empty()) {
+        // §9: with adaptive sampling, the shadow rays to each area light's corners first, as a
+        // stream per corner (coherent as a point light's), up to a few lights at a time.
+        const LightSampling sampling{std::clamp(opt.light_samples, 1, RenderOptions::max_light_samples),
+                                     opt.adaptive_light_samples, opt.shadows, opaque};
+        constexpr std::size_t lights_at_once = 2;
+        const std::size_t rect_lights = scene.rect_lights.size();
+        for (std::size_t first = 0; first < rect_lights; first += lights_at_once) {
+            const std::size_t last = std::min(rect_lights, first + lights_at_once);
+            T corners[4 * lights_at_once * N];
+            const bool traced = corners_first(sampling) && count > 0;
+            if (traced) {
+                Ray<T> corner_rays[4 * lights_at_once * N];
+                T one[4 * lights_at_once * N];
+                std::size_t m = 0;
+                for (std::size_t i = first; i < last; ++i)
+                    for (int c = 0; c < 4; ++c) {
+                        const Vertex<T> q = light_corner(scene.rect_lights[i], c);
+                        for (int k = 0; k < count; ++k) {
+                            const Vertex<T> o{from[0][k], from[1][k], from[2][k]};
+                            one[m] = T(1), corner_rays[m++] = {o, q - o};
+                        }
+                    }
+                stats.shadow += std::uint64_t(m);
+                if (opaque) {
+                    std::uint8_t blocked[4 * lights_at_once * N];
+                    scene.occluded(corner_rays, m, one, blocked);
+                    for (std::size_t j = 0; j < m; ++j) corners[j] = blocked[j] ? T(0) : T(1);
+                } else {
+                    scene.transmittance(corner_rays, m, one, corners);
+                }
+            }
+            for (std::size_t i = 0; i < std::size_t(count); ++i)
+                rect_lights_into_lanes(scene, lanes, stride, i, opaque, opt, stats, traced ? corners : nullptr,
+                                       std::size_t(count), first, last);
+        }
+    }
     // §8: the reflected and the transmitted rays of every point that has them, as two streams.
     Ray<T> next[2][N];
     int counts[2] = {0, 0}, slot[2][N];
     int mixed[N], mixes = 0; // the points with secondary rays, by lane
+    T reflectance[N];        // their Fresnel reflectances, by ray
     for (int i = 0; i < count; ++i) {
         const int k = shaded[i];
         if (!has_secondary(*material[i], depth, opt)) {
@@ -644,6 +735,7 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
         slot[0][k] = slot[1][k] = -1;
         if (sec.reflects) slot[0][k] = counts[0], next[0][counts[0]++] = sec.reflected;
         if (sec.transmits) slot[1][k] = counts[1], next[1][counts[1]++] = sec.transmitted;
+        reflectance[k] = sec.reflectance;
         mixed[mixes++] = i;
     }
     if (mixes == 0) return;
@@ -658,9 +750,9 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
     for (int j = 0; j < mixes; ++j) {
         const int i = mixed[j], k = shaded[i];
         const Color<T> none{};
-        out[k] =
-            mix_secondary(*material[i], Lanes::local(lanes, stride, std::size_t(i)),
-                          slot[0][k] >= 0 ? back[0][slot[0][k]] : none, slot[1][k] >= 0 ? back[1][slot[1][k]] : none);
+        out[k] = mix_secondary(*material[i], Lanes::local(lanes, stride, std::size_t(i)),
+                               slot[0][k] >= 0 ? back[0][slot[0][k]] : none,
+                               slot[1][k] >= 0 ? back[1][slot[1][k]] : none, reflectance[k]);
     }
 }
 } // namespace detail
@@ -686,7 +778,8 @@ struct RowBand {
 /// camera.width() × rows image: the same pixels, bit for bit, as those rows of a whole render,
 /// so that bands rendered apart (other processes, other machines) can be stacked into the
 /// picture (examples/merge_tiles). On opt.threads threads (fewer if some cannot be started).
-/// Throws std::invalid_argument for samples outside [1, 16], negative threads, max_depth outside
+/// Throws std::invalid_argument for samples outside [1, 16], light_samples outside
+/// [1, max_light_samples], negative threads, max_depth outside
 /// [0, max_depth_limit], rows outside the camera's; std::out_of_range for an object or
 /// material whose material or texture does not exist (Scene::validate); and whatever a worker
 /// threw (e.g. a user primitive, std::bad_alloc), once every worker has stopped.
@@ -696,6 +789,9 @@ template <class T, template <class> class... S>
     if (opt.samples < 1 || opt.samples > 16)
         throw std::invalid_argument("isin::render: samples " + std::to_string(opt.samples) + " is outside [1, 16]");
     if (opt.threads < 0) throw std::invalid_argument("isin::render: threads must not be negative");
+    if (opt.light_samples < 1 || opt.light_samples > RenderOptions::max_light_samples)
+        throw std::invalid_argument("isin::render: light_samples " + std::to_string(opt.light_samples) +
+                                    " is outside [1, " + std::to_string(RenderOptions::max_light_samples) + "]");
     if (opt.max_depth < 0 || opt.max_depth > RenderOptions::max_depth_limit)
         throw std::invalid_argument("isin::render: max_depth " + std::to_string(opt.max_depth) + " is outside [0, " +
                                     std::to_string(RenderOptions::max_depth_limit) + "]");

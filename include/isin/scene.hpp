@@ -316,6 +316,7 @@ public:
 
     std::vector<Material<T>> materials;
     std::vector<PointLight<T>> lights;
+    std::vector<RectLight<T>> rect_lights; ///< area lights, shaded after the point lights
     std::vector<Texture<T>> textures;
     Filter texture_filter = Filter::bilinear;
     Color<T> background{T(0), T(0), T(0)};
@@ -352,6 +353,12 @@ public:
     }
     /// Adds a point light.
     void add_light(const PointLight<T>& light) { lights.push_back(light); }
+    /// Adds a rectangular area light (a template, so that braced calls such as
+    /// add_light({{0, 40, 0}}) still mean a PointLight).
+    template <class L, std::enable_if_t<std::is_same_v<L, RectLight<T>>, int> = 0>
+    void add_light(const L& light) {
+        rect_lights.push_back(light);
+    }
 
     /// Material `index`; throws std::out_of_range if it does not exist (materials is public and
     /// may have changed since an object was added).

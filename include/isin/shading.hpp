@@ -20,7 +20,8 @@ namespace isin {
 /// With ior = 1 a transparent surface lets the ray straight through, as the note says; any other
 /// index of refraction bends it by Snell's law. `texture` indexes the scene's textures (−1: none).
 /// Beyond the note: a highlight colour, an ambient colour and a texture filter of its own, for
-/// materials from .mtl files (load_model).
+/// materials from .mtl files (load_model); and `fresnel`, which splits a transparent surface's
+/// reflected and transmitted light by the Fresnel equations instead of the fixed weights.
 template <class T>
 struct Material {
     static_assert(std::is_floating_point_v<T>, "isin::Material needs a floating-point type");
@@ -37,12 +38,27 @@ struct Material {
     Color<T> ambient_color{T(1), T(1), T(1)};
     /// How this material's texture is read; none = the scene's texture_filter.
     std::optional<Filter> texture_filter;
+    /// Where transparency > 0: the share reflectivity + transparency (at most 1) of the colour
+    /// goes R·reflected + (1 − R)·transmitted, R the unpolarised Fresnel reflectance for `ior`
+    /// at the ray's angle (fresnel_dielectric; 1 on total internal reflection).
+    bool fresnel = false;
 };
 
 /// A point light with a colour (white by default).
 template <class T>
 struct PointLight {
     Vertex<T> position;
+    Color<T> color{T(1), T(1), T(1)};
+};
+
+/// A rectangular area light: the parallelogram corner + u·edge_u + v·edge_v (u, v in [0,1]), a
+/// light of `color` spread uniformly over it. It shades as the mean, over the rectangle, of what a
+/// PointLight of its colour at each point would give (diffuse, specular and shadow); the renderer
+/// estimates that mean from RenderOptions::light_samples stratified points. It is not seen by rays.
+template <class T>
+struct RectLight {
+    static_assert(std::is_floating_point_v<T>, "isin::RectLight needs a floating-point type");
+    Vertex<T> corner, edge_u, edge_v;
     Color<T> color{T(1), T(1), T(1)};
 };
 
@@ -114,6 +130,35 @@ template <class T>
     if (!(sin2_t <= T(1))) return std::nullopt;          // §8: total internal reflection (or NaN)
     const T cos_t = std::sqrt(T(1) - sin2_t);
     return eta * d + (eta * cos_i - cos_t) * n;
+}
+
+/// Reflectances of a dielectric interface for the s- and p-polarised parts of the light.
+template <class T>
+struct FresnelReflectance {
+    T s, p;
+    /// Unpolarised light's reflectance: the mean of the two (Fresnel's equations).
+    [[nodiscard]] T unpolarised() const noexcept { return (s + p) / T(2); }
+};
+
+/// Fresnel's equations for a dielectric interface (Hecht, Optics, §4.6): the s- and p-polarised
+/// reflectances of light that meets it at cos θ1 = cos_i (its absolute value, clamped to 1) from
+/// the side of index n1, eta = n1 / n2; both 1 on total internal reflection (and for NaN input).
+template <class T>
+[[nodiscard]] inline FresnelReflectance<T> fresnel_reflectance(T cos_i, T eta) noexcept {
+    const T c1 = std::min(std::abs(cos_i), T(1));
+    const T sin2_t = eta * eta * (T(1) - c1 * c1); // §8: sin²θ2 = (n1/n2)² sin²θ1
+    if (!(sin2_t < T(1))) return {T(1), T(1)};     // §8: total internal reflection: all reflected
+    const T c2 = std::sqrt(T(1) - sin2_t);
+    const T rs = (eta * c1 - c2) / (eta * c1 + c2); // Fresnel: r_s = (n1 cos θ1 − n2 cos θ2)/(n1 cos θ1 + n2 cos θ2)
+    const T rp = (eta * c2 - c1) / (eta * c2 + c1); // Fresnel: r_p = (n1 cos θ2 − n2 cos θ1)/(n1 cos θ2 + n2 cos θ1)
+    return {rs * rs, rp * rp};                      // Fresnel: R = r²
+}
+
+/// Unpolarised Fresnel reflectance (Rs + Rp)/2 of a dielectric interface (fresnel_reflectance);
+/// the transmitted share is 1 − R.
+template <class T>
+[[nodiscard]] inline T fresnel_dielectric(T cos_i, T eta) noexcept {
+    return fresnel_reflectance(cos_i, eta).unpolarised();
 }
 
 } // namespace isin

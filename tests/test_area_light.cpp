@@ -1,0 +1,258 @@
+// Rectangular area lights: the mean of point lights over a rectangle, estimated from stratified
+// samples (convergence to dense quadrature, penumbrae, determinism across threads and bands).
+#include <isin/area_light.hpp>
+#include <isin/render.hpp>
+
+#include <doctest/doctest.h>
+
+#include "approx.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace {
+
+// A white diffuse floor (kd = 1, no ambient or highlight) at y = −10 under a 20 × 20 RectLight at
+// y = 20; with `edge`, an opaque plane at y = 10 over x < 0 throws a penumbra along x ≈ 0.
+template <class T>
+struct FloorScene {
+    static constexpr T floor_y = T(-10), light_y = T(20), occluder_y = T(10);
+    isin::Scene<T, isin::Triangle> scene;
+    isin::RectLight<T> light{{-10, light_y, 50}, {20, 0, 0}, {0, 0, 20}, {T(0.9), T(0.9), T(0.9)}};
+    bool edge;
+    explicit FloorScene(bool with_edge) : edge(with_edge) {
+        isin::Material<T> white;
+        white.ka = T(0), white.kd = T(1), white.ks = T(0);
+        const auto m = scene.add_material(white);
+        scene.add(isin::Triangle<T>{{-500, floor_y, 0}, {-500, floor_y, 500}, {500, floor_y, 0}}, m);
+        scene.add(isin::Triangle<T>{{500, floor_y, 500}, {500, floor_y, 0}, {-500, floor_y, 500}}, m);
+        if (edge) {
+            scene.add(isin::Triangle<T>{{-900, occluder_y, -500}, {0, occluder_y, 900}, {0, occluder_y, -500}}, m);
+            scene.add(isin::Triangle<T>{{-900, occluder_y, -500}, {-900, occluder_y, 900}, {0, occluder_y, 900}}, m);
+        }
+        scene.add_light(light);
+    }
+    // The mean over the rectangle of kd·(N·L)·colour·visibility at floor point P, by the midpoint
+    // rule on gu × gv points; visibility in closed form (the occluder's edge is the line x = 0).
+    [[nodiscard]] double exact(const isin::Vertex<T>& P, int gu = 1024, int gv = 16) const {
+        double sum = 0;
+        const double h = (double(occluder_y) - double(P.y)) / (double(light_y) - double(P.y));
+        for (int j = 0; j < gv; ++j)
+            for (int i = 0; i < gu; ++i) {
+                const double qx = double(light.corner.x) + (i + 0.5) / gu * double(light.edge_u.x);
+                const double qz = double(light.corner.z) + (j + 0.5) / gv * double(light.edge_v.z);
+                const double dx = qx - double(P.x), dy = double(light_y) - double(P.y), dz = qz - double(P.z);
+                if (edge && double(P.x) + (qx - double(P.x)) * h < 0) continue; // §9: behind the occluder
+                sum += dy / std::sqrt(dx * dx + dy * dy + dz * dz);             // §7: N·L with N = +y
+            }
+        return sum / (double(gu) * gv) * double(light.color.r);
+    }
+};
+
+// Per pixel of a render of `fs` (w × h, the note's camera at the origin looking along +z, tilted
+// down), the difference in levels between its red byte and 255·exact at its floor point.
+template <class T>
+std::vector<double> errors(const FloorScene<T>& fs, int w, int h, const isin::RenderOptions& opt) {
+    const isin::Camera<T> camera{w, h, {0, 0, 0}, T(0), T(-0.6)};
+    const isin::Image image = isin::render(fs.scene, camera, opt);
+    std::vector<double> out;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const isin::Ray<T> ray = camera.primary_ray(T(x), T(y));
+            const auto hit = fs.scene.intersect(ray);
+            if (!hit || !(ray.direction.y < T(0))) continue;
+            const isin::Vertex<T> P = ray.origin + hit.t * ray.direction;
+            if (std::abs(double(P.y) - double(fs.floor_y)) > 1e-3) continue; // the occluder, seen from below
+            out.push_back(double(image(x, y).r) - 255 * fs.exact(P));
+        }
+    return out;
+}
+
+struct Summary {
+    double mean = 0, rms = 0, worst = 0;
+    std::size_t n = 0;
+};
+Summary summarise(const std::vector<double>& e) {
+    Summary s;
+    for (const double d : e) s.mean += d, s.rms += d * d, s.worst = std::max(s.worst, std::abs(d));
+    s.n = e.size();
+    if (s.n) s.mean /= double(s.n), s.rms = std::sqrt(s.rms / double(s.n));
+    return s;
+}
+
+} // namespace
+
+TEST_CASE("RectLight: braced add_light calls still add PointLights; a RectLight goes to rect_lights") {
+    isin::Scene<float, isin::Sphere> scene;
+    scene.add_light({{0, 40, 0}});
+    scene.add_light({{1, 2, 3}, {0.5f, 0.5f, 0.5f}});
+    CHECK(scene.lights.size() == 2);
+    CHECK(scene.rect_lights.empty());
+    CHECK(scene.lights[0].position == isin::Vec3f{0, 40, 0});
+    scene.add_light(isin::RectLight<float>{{-1, 10, -1}, {2, 0, 0}, {0, 0, 2}});
+    CHECK(scene.lights.size() == 2);
+    REQUIRE(scene.rect_lights.size() == 1);
+    CHECK(scene.rect_lights[0].edge_u == isin::Vec3f{2, 0, 0});
+}
+
+TEST_CASE("light_strata: nu × nv = samples, nv the largest divisor up to √samples, the longer edge divided more") {
+    CHECK(isin::light_strata(16, 1.0, 1.0).nu == 4);
+    CHECK(isin::light_strata(16, 1.0, 1.0).nv == 4);
+    CHECK(isin::light_strata(8, 2.0, 1.0).nu == 4);
+    CHECK(isin::light_strata(8, 2.0, 1.0).nv == 2);
+    CHECK(isin::light_strata(8, 1.0, 2.0).nu == 2);
+    CHECK(isin::light_strata(7, 1.0, 1.0).nu * isin::light_strata(7, 1.0, 1.0).nv == 7);
+    CHECK(isin::light_strata(4096, 1.0, 1.0).nu == 64);
+    CHECK(isin::light_strata(0, 1.0, 1.0).nu * isin::light_strata(0, 1.0, 1.0).nv == 1);
+}
+
+TEST_CASE_TEMPLATE("light_sample: sample k lies in stratum k; the same seed gives the same point", T, float, double) {
+    const isin::RectLight<T> light{{1, 2, 3}, {4, 0, 0}, {0, 0, 2}};
+    const auto strata = isin::light_strata(12, T(4), T(2)); // 4 × 3
+    REQUIRE(strata.nu == 4);
+    for (std::uint64_t seed : {1ull, 99ull, 0xFFFFFFFFFFFFull})
+        for (int k = 0; k < 12; ++k) {
+            const isin::Vertex<T> q = isin::light_sample(light, strata, seed, k);
+            const T u = (q.x - T(1)) / T(4), v = (q.z - T(3)) / T(2);
+            CHECK(u * T(4) >= T(k % 4) - T(1e-5));
+            CHECK(u * T(4) <= T(k % 4 + 1) + T(1e-5));
+            CHECK(v * T(3) >= T(k / 4) - T(1e-5));
+            CHECK(v * T(3) <= T(k / 4 + 1) + T(1e-5));
+            CHECK(q == isin::light_sample(light, strata, seed, k));
+        }
+}
+
+TEST_CASE_TEMPLATE("light_sample: multi-jittered, the u of the N samples in N distinct strata, and their v", T, float,
+                   double) {
+    const isin::RectLight<T> light{{0, 0, 0}, {1, 0, 0}, {0, 0, 1}};
+    for (int n : {16, 12, 7, 64}) {
+        const auto strata = isin::light_strata(n, T(1), T(1));
+        std::vector<int> u_count(std::size_t(n), 0), v_count(std::size_t(n), 0);
+        for (int k = 0; k < n; ++k) {
+            const isin::Vertex<T> q = isin::light_sample(light, strata, 12345u, k);
+            ++u_count[std::size_t(std::min(n - 1, int(q.x * T(n))))];
+            ++v_count[std::size_t(std::min(n - 1, int(q.z * T(n))))];
+        }
+        CAPTURE(n);
+        CHECK(*std::min_element(u_count.begin(), u_count.end()) == 1);
+        CHECK(*std::min_element(v_count.begin(), v_count.end()) == 1);
+    }
+}
+
+TEST_CASE_TEMPLATE("RectLight on a diffuse floor: every pixel within 1 level of dense quadrature at 256 samples", T,
+                   float, double) {
+    const FloorScene<T> fs(false);
+    isin::RenderOptions opt;
+    opt.progress = false;
+    opt.light_samples = 256;
+    for (bool adaptive : {false, true}) {
+        opt.adaptive_light_samples = adaptive;
+        const Summary s = summarise(errors(fs, 32, 18, opt));
+        CAPTURE(adaptive);
+        CHECK(s.n > 100);
+        CHECK(s.worst <= 1.0);
+    }
+}
+
+TEST_CASE_TEMPLATE("RectLight penumbra behind an edge: mean ≤ 0.5, RMS ≤ 1.5, worst ≤ 6 levels at 256 samples; "
+                   "every pixel within 2 at 1,024",
+                   T, float, double) {
+    const FloorScene<T> fs(true);
+    isin::RenderOptions opt;
+    opt.progress = false;
+    opt.adaptive_light_samples = false;
+    opt.light_samples = 256;
+    const Summary s = summarise(errors(fs, 32, 18, opt));
+    CHECK(s.n > 100);
+    CHECK(std::abs(s.mean) <= 0.5);
+    CHECK(s.rms <= 1.5);
+    CHECK(s.worst <= 6.0);
+    opt.light_samples = 1024;
+    CHECK(summarise(errors(fs, 32, 18, opt)).worst <= 2.0);
+    opt.adaptive_light_samples = true; // the edge hides a corner from every penumbra point: adaptive is exact too
+    CHECK(summarise(errors(fs, 32, 18, opt)).worst <= 2.0);
+}
+
+TEST_CASE_TEMPLATE("rect_light_term: the penumbra's RMS error falls at least as fast as samples^-1/2", T, float,
+                   double) {
+    const FloorScene<T> fs(true);
+    // Floor points across the penumbra (x from −12 to 12).
+    std::vector<isin::Vertex<T>> points;
+    for (int i = 0; i < 64; ++i) points.push_back({T(-12) + T(24) * T(i) / T(63), fs.floor_y, T(60)});
+    std::vector<double> exact;
+    for (const auto& P : points) exact.push_back(fs.exact(P));
+    double previous = 0;
+    for (int samples : {4, 16, 64, 256}) {
+        double sum = 0;
+        std::uint64_t rays = 0;
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            const isin::LitPoint<T> p{points[i], points[i] + isin::Vertex<T>{0, T(1e-3), 0},
+                                      {0, 1, 0}, {0, 1, 0},
+                                      T(1),      T(0),
+                                      T(1),      {1, 1, 1},
+                                      {1, 1, 1}};
+            isin::LightSampling s;
+            s.samples = samples, s.adaptive = false;
+            const auto c = isin::rect_light_term(fs.scene, fs.light, p, isin::light_seed(points[i], 0), s, rays);
+            sum += (double(c.r) - exact[i]) * (double(c.r) - exact[i]);
+        }
+        const double rms = std::sqrt(sum / double(points.size()));
+        CAPTURE(samples);
+        CAPTURE(rms);
+        if (previous > 0) CHECK(rms <= previous / 2 * 1.05); // 4× the samples: at least half the error
+        previous = rms;
+    }
+}
+
+TEST_CASE_TEMPLATE("RectLight renders: the same pixels on 1 and 2 threads, in bands, and as trace() gives them", T,
+                   float, double) {
+    FloorScene<T> fs(true);
+    isin::Material<T> shiny;
+    shiny.kd = T(0.5), shiny.ks = T(0.5), shiny.shininess = T(20);
+    fs.scene.add(isin::Triangle<T>{{-5, -9, 40}, {5, -9, 40}, {0, 5, 45}}, fs.scene.add_material(shiny));
+    const isin::Camera<T> camera{40, 24, {0, 0, 0}, T(0), T(-0.5)};
+    isin::RenderOptions opt;
+    opt.progress = false;
+    opt.light_samples = 16;
+    for (bool adaptive : {false, true}) {
+        opt.adaptive_light_samples = adaptive;
+        opt.threads = 1;
+        const isin::Image one = isin::render(fs.scene, camera, opt);
+        opt.threads = 2;
+        const isin::Image two = isin::render(fs.scene, camera, opt);
+        CHECK(one.pixels() == two.pixels());
+        CHECK(one.pixels() == isin::render(fs.scene, camera, opt).pixels());
+        int differ = 0;
+        for (int b = 0; b < 3; ++b) {
+            const isin::RowBand band = isin::row_band(24, b, 3);
+            const isin::Image part = isin::render_rows(fs.scene, camera, band.first, band.rows, opt);
+            for (int y = 0; y < band.rows; ++y)
+                for (int x = 0; x < 40; ++x) differ += part(x, y) != one(x, band.first + y);
+        }
+        CHECK(differ == 0);
+        isin::RenderStats stats;
+        int lit = 0;
+        for (int y = 0; y < 24; ++y)
+            for (int x = 0; x < 40; ++x) {
+                const auto c = isin::trace(fs.scene, camera.primary_ray(T(x), T(y)), 0, opt, stats);
+                CHECK(isin::to_rgb8(c) == one(x, y));
+                lit += one(x, y).r > 0;
+            }
+        CHECK(lit > 100);
+    }
+}
+
+TEST_CASE("render: light_samples outside [1, max_light_samples] throws") {
+    FloorScene<float> fs(false);
+    const isin::Camera<float> camera{8, 8};
+    isin::RenderOptions opt;
+    opt.progress = false;
+    for (int bad : {0, -3, isin::RenderOptions::max_light_samples + 1}) {
+        opt.light_samples = bad;
+        CHECK_THROWS_AS((void)isin::render(fs.scene, camera, opt), std::invalid_argument);
+    }
+    opt.light_samples = 1;
+    CHECK_NOTHROW((void)isin::render(fs.scene, camera, opt));
+}
