@@ -239,6 +239,10 @@ public:
         Xxh64 sum;
         sum.update(data, header_bytes);
         const unsigned char* p = data + header_bytes;
+        // On huge pages where the kernel has them, as the build's arrays (huge_pages.hpp).
+        detail::reserve_huge_pages(tree.nodes_, std::size_t(nodes));
+        detail::reserve_huge_pages(tree.leaves_, std::size_t(leaves));
+        detail::reserve_huge_pages(tree.primitives_, std::size_t(primitives));
         tree.nodes_.resize(std::size_t(nodes));
         for (std::size_t i = 0; i < nodes;) {
             const std::size_t end = std::min<std::size_t>(std::size_t(nodes), i + 256);
