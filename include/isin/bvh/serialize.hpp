@@ -132,6 +132,41 @@ inline void swap_words(unsigned char* p, std::size_t count, std::size_t size) no
         for (std::size_t a = 0, b = size - 1; a < b; ++a, --b) std::swap(p[a], p[b]);
 }
 
+/// What BvhFile::decode reads from: bytes in memory.
+struct MemorySource {
+    const unsigned char* p;
+    std::size_t left;
+    std::string error; // always empty: running out is truncation
+    /// The next n bytes into `to`; false when fewer are left.
+    bool read(void* to, std::size_t n) noexcept {
+        if (n > left) return false;
+        if (n) std::memcpy(to, p, n);
+        p += n, left -= n;
+        return true;
+    }
+};
+
+#if ISIN_DETAIL_POSIX_FILES
+/// What BvhFile::decode reads from: an open file, read straight into the Bvh's arrays (no copy of
+/// the whole file is held).
+struct FileSource {
+    int fd;
+    std::string error; // why a read failed, or empty when the file ended
+    /// The next n bytes into `to`; false when the file ends first or a read fails.
+    bool read(void* to, std::size_t n) {
+        auto* b = static_cast<unsigned char*>(to);
+        while (n) {
+            const ssize_t got = ::read(fd, b, n);
+            if (got < 0 && errno == EINTR) continue;
+            if (got < 0) error = "cannot read: " + errno_text(errno);
+            if (got <= 0) return false;
+            b += got, n -= std::size_t(got);
+        }
+        return true;
+    }
+};
+#endif
+
 /// The file of a Bvh<T> (docs/bvh_format.md): its encoder and its checking decoder.
 template <class T>
 class BvhFile {
@@ -180,14 +215,22 @@ public:
         return out;
     }
 
-    /// The Bvh in the `size` bytes at `data`, a file named `name` in messages; throws BvhFileError.
-    [[nodiscard]] static Bvh<T> decode(const unsigned char* data, std::size_t size, const std::string& name,
+    /// The Bvh in the `size` bytes `source` holds (MemorySource, FileSource), a file named `name`
+    /// in messages; throws BvhFileError. The file's parts are read straight into the Bvh's arrays
+    /// (records with padding through a small buffer), each piece summed while it is in cache.
+    template <class Source>
+    [[nodiscard]] static Bvh<T> decode(Source& source, std::uint64_t size, const std::string& name,
                                        const ReadLimits& limits) {
         const auto fail = [&name](const std::string& what) {
             return BvhFileError("isin Bvh file " + name + ": " + what);
         };
         if (!detail::file_too_large(size, limits).empty()) throw fail(detail::file_too_large(size, limits));
         if (size == 0) throw fail("is empty");
+        unsigned char data[header_bytes] = {};
+        const auto read = [&](void* to, std::size_t n) {
+            if (!source.read(to, n)) throw fail(source.error.empty() ? "truncated while it was read" : source.error);
+        };
+        read(data, std::size_t(std::min<std::uint64_t>(size, header_bytes)));
         if (size < 12 || std::memcmp(data, magic, 8) != 0)
             throw fail(size < 12 && std::memcmp(data, magic, std::min<std::size_t>(size, 8)) == 0
                            ? "truncated: " + std::to_string(size) + " bytes, less than a header"
@@ -233,38 +276,50 @@ public:
         if (!(double(T(bound)) == bound && bound >= 0.0) || !(double(T(leaf_scale)) == leaf_scale && leaf_scale >= 0.0))
             throw fail("bound or leaf scale out of range");
 
-        // Copied and checksummed together, a batch of records at a time (in cache for the sum).
         Bvh<T> bvh;
         Tree& tree = bvh.tree_;
         Xxh64 sum;
         sum.update(data, header_bytes);
-        const unsigned char* p = data + header_bytes;
+        // Read and summed a piece at a time: arrays in pieces of 64 KiB, records 256 at a time.
+        const auto read_array = [&](void* array, std::size_t bytes) {
+            constexpr std::size_t piece = std::size_t(1) << 16;
+            for (std::size_t done = 0; done < bytes; done += piece) {
+                unsigned char* const to = static_cast<unsigned char*>(array) + done;
+                const std::size_t n = std::min(piece, bytes - done);
+                read(to, n);
+                sum.update(to, n);
+            }
+        };
+        std::vector<unsigned char> buffer;
+        const auto read_records = [&](auto* records, std::size_t count, std::size_t bytes, std::size_t reals) {
+            buffer.resize(std::min<std::size_t>(count, 256) * bytes);
+            for (std::size_t i = 0; i < count;) {
+                const std::size_t end = std::min<std::size_t>(count, i + 256);
+                read(buffer.data(), (end - i) * bytes);
+                sum.update(buffer.data(), (end - i) * bytes);
+                for (const unsigned char* p = buffer.data(); i < end; ++i, p += bytes)
+                    get_record(&records[i], p, bytes, reals);
+            }
+        };
         // On huge pages where the kernel has them, as the build's arrays (huge_pages.hpp).
         detail::reserve_huge_pages(tree.nodes_, std::size_t(nodes));
         detail::reserve_huge_pages(tree.leaves_, std::size_t(leaves));
         detail::reserve_huge_pages(tree.primitives_, std::size_t(primitives));
         tree.nodes_.resize(std::size_t(nodes));
-        for (std::size_t i = 0; i < nodes;) {
-            const std::size_t end = std::min<std::size_t>(std::size_t(nodes), i + 256);
-            sum.update(p, (end - i) * node_bytes);
-            for (; i < end; ++i) p = get_record(&tree.nodes_[i], p, node_bytes, 48);
-        }
+        read_records(tree.nodes_.data(), std::size_t(nodes), node_bytes, 48);
         tree.leaves_.resize(std::size_t(leaves));
-        p = get_array(tree.leaves_.data(), p, std::size_t(leaves) * leaf_bytes, sum);
+        read_array(tree.leaves_.data(), std::size_t(leaves) * leaf_bytes);
         tree.primitives_.resize(std::size_t(primitives));
-        p = get_array(tree.primitives_.data(), p, std::size_t(primitives) * primitive_bytes, sum);
+        read_array(tree.primitives_.data(), std::size_t(primitives) * primitive_bytes);
         auto& blocks = bvh.blocks_.blocks_;
         blocks.resize(std::size_t(leaves));
-        if (sizeof(Block) == block_bytes) {
-            p = get_array(blocks.data(), p, std::size_t(leaves) * block_bytes, sum);
-        } else {
-            for (std::size_t i = 0; i < leaves;) {
-                const std::size_t end = std::min<std::size_t>(std::size_t(leaves), i + 256);
-                sum.update(p, (end - i) * block_bytes);
-                for (; i < end; ++i) p = get_record(&blocks[i], p, block_bytes, 72);
-            }
-        }
-        if (sum.digest() != get64(p)) throw fail("checksum mismatch (a damaged file)");
+        if (sizeof(Block) == block_bytes)
+            read_array(blocks.data(), std::size_t(leaves) * block_bytes);
+        else
+            read_records(blocks.data(), std::size_t(leaves), block_bytes, 72);
+        unsigned char stored[checksum_bytes];
+        read(stored, checksum_bytes);
+        if (sum.digest() != get64(stored)) throw fail("checksum mismatch (a damaged file)");
         if (!host_little_endian()) {
             swap_words(reinterpret_cast<unsigned char*>(tree.leaves_.data()), 2 * tree.leaves_.size(), 4);
             swap_words(reinterpret_cast<unsigned char*>(tree.primitives_.data()), tree.primitives_.size(), 4);
@@ -387,25 +442,14 @@ private:
         if (!host_little_endian()) swap_record(p, reals);
         return p + bytes;
     }
-    static const unsigned char* get_record(void* record, const unsigned char* p, std::size_t bytes,
-                                           std::size_t reals) noexcept {
+    static void get_record(void* record, const unsigned char* p, std::size_t bytes, std::size_t reals) noexcept {
         std::memcpy(record, p, bytes);
         if (!host_little_endian()) swap_record(record, reals);
-        return p + bytes;
     }
-    // Arrays of uint32 (leaves, primitives; swapped by put_array here, by decode after the sum).
+    // Arrays of uint32 (leaves, primitives; swapped here, and by decode after the sum).
     static unsigned char* put_array(unsigned char* p, const void* array, std::size_t bytes) {
         if (bytes) std::memcpy(p, array, bytes);
         if (!host_little_endian()) swap_words(p, bytes / 4, 4);
-        return p + bytes;
-    }
-    static const unsigned char* get_array(void* array, const unsigned char* p, std::size_t bytes, Xxh64& sum) noexcept {
-        constexpr std::size_t batch = std::size_t(1) << 16;
-        for (std::size_t done = 0; done < bytes; done += batch) {
-            const std::size_t n = std::min(batch, bytes - done);
-            std::memcpy(static_cast<unsigned char*>(array) + done, p + done, n);
-            sum.update(p + done, n);
-        }
         return p + bytes;
     }
 };
@@ -421,16 +465,31 @@ void Bvh<T>::save(const std::string& path) const {
 
 template <class T>
 Bvh<T> Bvh<T>::load(const std::string& path, ReadLimits limits) {
-    std::vector<unsigned char, detail::UninitAllocator<unsigned char>> bytes; // written by the read alone
+    const auto fail = [&path](const std::string& why) { return BvhFileError("isin Bvh file " + path + ": " + why); };
+#if ISIN_DETAIL_POSIX_FILES
+    // As read_whole_file (detail/file.hpp): regular files only, the size limit before any read.
+    const detail::Descriptor fd(::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC));
+    if (fd.get() < 0) throw fail("cannot open: " + detail::errno_text(errno));
+    struct stat st {};
+    if (::fstat(fd.get(), &st) != 0) throw fail("cannot read: " + detail::errno_text(errno));
+    if (S_ISDIR(st.st_mode)) throw fail("is a directory");
+    if (!S_ISREG(st.st_mode)) throw fail("is not a regular file (a device, pipe or socket)");
+    detail::FileSource source{fd.get(), {}};
+    return detail::BvhFile<T>::decode(source, std::uint64_t(st.st_size), path, limits);
+#else
+    std::vector<unsigned char> bytes;
     const std::string why = detail::read_whole_file(path, bytes, limits);
-    if (!why.empty()) throw BvhFileError("isin Bvh file " + path + ": " + why);
-    return detail::BvhFile<T>::decode(bytes.data(), bytes.size(), path, limits);
+    if (!why.empty()) throw fail(why);
+    detail::MemorySource source{bytes.data(), bytes.size(), {}};
+    return detail::BvhFile<T>::decode(source, bytes.size(), path, limits);
+#endif
 }
 
 template <class T>
 Bvh<T> Bvh<T>::load_from_memory(const void* data, std::size_t size, ReadLimits limits) {
     if (!data && size) throw BvhFileError("isin Bvh file (memory): null data of " + std::to_string(size) + " bytes");
-    return detail::BvhFile<T>::decode(static_cast<const unsigned char*>(data), size, "(memory)", limits);
+    detail::MemorySource source{static_cast<const unsigned char*>(data), size, {}};
+    return detail::BvhFile<T>::decode(source, size, "(memory)", limits);
 }
 
 } // namespace isin
