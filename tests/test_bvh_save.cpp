@@ -2,6 +2,7 @@
 // saved one's arrays bit for bit and answers every ray as it did; every damaged, truncated,
 // hostile or foreign file is refused with a BvhFileError naming the file and what is wrong.
 #include <isin/bvh/serialize.hpp>
+#include <isin/scene.hpp>
 
 #include <doctest/doctest.h>
 
@@ -409,4 +410,41 @@ TEST_CASE_TEMPLATE("Bvh files: empty, a directory, missing, too large, unwritabl
     CHECK_THROWS_AS(bvh.save(dir / "no/such/dir/x.bvh"), isin::BvhFileError);
     CHECK_THROWS_AS(bvh.save(dir.path.string()), isin::BvhFileError);
     CHECK_THROWS_AS((void)isin::Bvh<T>::load_from_memory(nullptr, 10), isin::BvhFileError);
+}
+
+TEST_CASE_TEMPLATE("a scene takes a mesh with its saved Bvh, and refuses another mesh's", T, float, double) {
+    const auto tris = workloads::icosphere<T>({0, 0, 6}, 2, 3);
+    const TempDir dir("isin-bvh-save-");
+    const std::string path = dir / "mesh.bvh";
+    isin::Scene<T, isin::Sphere> built;
+    const auto id = built.add_mesh(tris, built.add_material({}));
+    built.add_instance(id, isin::Transform<T>::translation({3, 0, 2}));
+    built.commit();
+    built.mesh_bvh(id).save(path);
+
+    isin::Scene<T, isin::Sphere> loaded;
+    const auto mesh = isin::Mesh<T>::from_triangles(tris);
+    const auto lid = loaded.add_mesh(mesh, loaded.add_material({}), isin::Bvh<T>::load(path));
+    loaded.add_instance(lid, isin::Transform<T>::translation({3, 0, 2}));
+    loaded.commit();
+    check_same_arrays(built.mesh_bvh(id), loaded.mesh_bvh(lid));
+    std::size_t hits = 0, differ = 0;
+    for (const auto& ray : test_rays(tris, 2000, 21)) {
+        const isin::Hit<T> a = built.intersect(ray), b = loaded.intersect(ray);
+        hits += a ? 1u : 0u;
+        differ += same_hit(a, b) ? 0u : 1u;
+    }
+    CHECK(hits > 500);
+    CHECK(differ == 0);
+
+    auto moved = mesh; // one vertex moved by one ulp: not the mesh the Bvh was built over
+    moved.positions[5].x = std::nextafter(moved.positions[5].x, T(1e9));
+    CHECK_THROWS_AS(loaded.add_mesh(moved, 0, isin::Bvh<T>::load(path)), std::invalid_argument);
+    auto fewer = mesh;
+    fewer.indices.pop_back();
+    CHECK_THROWS_AS(loaded.add_mesh(fewer, 0, isin::Bvh<T>::load(path)), std::invalid_argument);
+    auto more = mesh;
+    more.indices.push_back({0, 1, 2});
+    CHECK_THROWS_AS(loaded.add_mesh(more, 0, isin::Bvh<T>::load(path)), std::invalid_argument);
+    CHECK(loaded.mesh_count() == 1);
 }
