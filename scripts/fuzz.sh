@@ -26,6 +26,7 @@ done
 cp tests/data/repro/*.png tests/data/repro/*.jpg "$corpus/image/"
 cp tests/data/repro/*.ply "$corpus/ply/"
 cp tests/data/repro/*.obj "$corpus/obj/"
+cp tests/data/repro/*.bvh "$corpus/bvh/"
 cd "$dir"
 run() { # run LOG ARGS…: libFuzzer's summary lines, or its whole report and failure
   local log=$1

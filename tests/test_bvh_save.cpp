@@ -364,6 +364,22 @@ TEST_CASE_TEMPLATE("a Bvh file whose tree is wrong but sealed is refused: every 
     CHECK(contains(edited(leaves_at + 4, 9), "index out of range"));
     CHECK(contains(edited(primitives_at, 123456), "not its leaf's"));
     CHECK(contains(edited(blocks_at + 72 * sizeof(T), 123456), "not its leaf's"));
+    { // an empty child slot with a box a ray can enter
+        Bytes b = file;
+        std::size_t node = std::size_t(nodes), slot = 0;
+        for (std::size_t i = 0; i < nodes && node == nodes; ++i)
+            for (std::size_t k = 0; k < 8; ++k)
+                if ((get64(b, child0 + i * node_bytes + 4 * k) & 0xffffffffu) == 0xffffffffu) {
+                    node = i, slot = k;
+                    break;
+                }
+        REQUIRE(node < nodes);
+        const T zero = 0;
+        for (std::size_t a = 0; a < 6; ++a) // lo[0..2] then hi[0..2] of the slot
+            std::memcpy(&b[88 + node * node_bytes + (a * 8 + slot) * sizeof(T)], &zero, sizeof(T));
+        reseal(b);
+        CHECK(contains(refusal<T>(b), "is empty, its box not"));
+    }
     CHECK(contains(edited(28, 1), "depth"));
     CHECK(contains(edited(28, 200), "depth"));
     // Two references to one node: the second is refused.

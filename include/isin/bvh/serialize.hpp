@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -341,7 +342,8 @@ private:
 
     // Why the tree and blocks of a decoded Bvh are not a Bvh's, or "": every reference inside its
     // arrays, each node and leaf reached exactly once from the root down (children after their
-    // parent, so no cycle), no deeper than `depth` and the traversal stack, the root's bounds as
+    // parent, so no cycle), no deeper than `depth` and the traversal stack, empty slots with the
+    // empty box (which no ray enters, so no walk follows them), the root's bounds as
     // `bound`, each block holding its leaf's primitives, padded as the build pads.
     static std::string check(const Bvh<T>& bvh, std::uint32_t depth) {
         const Tree& tree = bvh.tree_;
@@ -355,7 +357,11 @@ private:
             deepest = std::max<std::uint32_t>(deepest, level[i]);
             for (int k = 0; k < 8; ++k) {
                 const std::uint32_t c = tree.nodes_[i].child[k];
-                if (c == Tree::empty_child) continue;
+                if (c == Tree::empty_child) { // never entered only with the empty box: traversal relies on it
+                    if (!empty_box(tree.nodes_[i], k))
+                        return "node " + std::to_string(i) + " child " + std::to_string(k) + " is empty, its box not";
+                    continue;
+                }
                 const auto at = [&] { return "node " + std::to_string(i) + " child " + std::to_string(k); };
                 if (c & Tree::leaf_bit) {
                     const std::uint32_t leaf = c & ~Tree::leaf_bit;
@@ -398,6 +404,14 @@ private:
             }
         }
         return "";
+    }
+
+    // Whether child slot k of n has the empty box the build gives an empty slot (lo = +∞, hi = −∞).
+    [[nodiscard]] static bool empty_box(const Node& n, int k) noexcept {
+        constexpr T inf = std::numeric_limits<T>::infinity();
+        bool empty = true;
+        for (int a = 0; a < 3; ++a) empty &= n.lo[a][k] == inf && n.hi[a][k] == -inf;
+        return empty;
     }
 
     [[nodiscard]] static std::string precision_name(std::uint32_t bytes) {
