@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes isin's file readers with libFuzzer (clang, -fsanitize=fuzzer,address,undefined):
-# read_image_from_memory (PNG, JPEG, PPM), the PLY and the OBJ reader (load_mesh_from_memory).
+# read_image_from_memory (PNG, JPEG, PPM), the PLY and the OBJ reader (load_mesh_from_memory), and
+# Bvh<T>::load_from_memory (saved Bvhs).
 #   bash scripts/fuzz.sh [SECONDS]      (default 45 per target)
 # Builds the targets in build/fuzz, writes seed corpora there (tests/fuzz/make_seeds, plus
 # progressive and restart-marker JPEGs made by jpegtran, plus the reproducers of
@@ -25,6 +26,7 @@ done
 cp tests/data/repro/*.png tests/data/repro/*.jpg "$corpus/image/"
 cp tests/data/repro/*.ply "$corpus/ply/"
 cp tests/data/repro/*.obj "$corpus/obj/"
+cp tests/data/repro/*.bvh "$corpus/bvh/"
 cd "$dir"
 run() { # run LOG ARGS…: libFuzzer's summary lines, or its whole report and failure
   local log=$1
@@ -36,7 +38,7 @@ run() { # run LOG ARGS…: libFuzzer's summary lines, or its whole report and fa
   fi
   grep -E "^#[0-9]+.*(INITED|DONE)|stat::number_of_executed_units|stat::peak_rss_mb" "$log" || true
 }
-for target in image ply obj; do
+for target in image ply obj bvh; do
   dict=()
   [ -f "../../tests/fuzz/$target.dict" ] && dict=(-dict="../../tests/fuzz/$target.dict")
   echo "== isin fuzz: $target, ${seconds} s" >&2

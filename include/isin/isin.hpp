@@ -30,6 +30,7 @@
 #include "baldwin_weber.hpp"
 #include "batch.hpp"
 #include "bvh.hpp"
+#include "bvh/serialize.hpp"
 #include "camera.hpp"
 #include "color.hpp"
 #include "culling.hpp"

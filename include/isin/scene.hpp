@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -405,23 +406,23 @@ public:
     /// material that does not exist. The Bvh over the placements is built by commit() or, failing
     /// that, by the next trace.
     MeshId add_mesh(Mesh<T> mesh, std::uint32_t material_id, const BvhOptions& options = {}) {
-        mesh.validate();
-        MeshEntry entry;
-        entry.largest_material_id =
-            mesh.material.empty() ? 0 : *std::max_element(mesh.material.begin(), mesh.material.end());
-        (void)material(material_id + entry.largest_material_id);
-        entry.material = material_id;
-        entry.mesh = std::make_shared<const Mesh<T>>(std::move(mesh));
-        entry.bvh = std::make_shared<const Bvh<T>>(*entry.mesh, options);
-        meshes_.push_back(std::move(entry));
-        const MeshId id{static_cast<std::uint32_t>(meshes_.size() - 1)};
-        (void)add_instance(id, Transform<T>::identity());
-        return id;
+        return add_mesh_entry(std::move(mesh), material_id,
+                              [&options](const Mesh<T>& m) { return std::make_shared<const Bvh<T>>(m, options); });
     }
     /// Adds a triangle soup as a mesh (three vertices a triangle), as add_mesh(Mesh).
     MeshId add_mesh(const std::vector<Triangle<T>>& triangles, std::uint32_t material_id,
                     const BvhOptions& options = {}) {
         return add_mesh(Mesh<T>::from_triangles(triangles), material_id, options);
+    }
+    /// As add_mesh(mesh, material_id), with `bvh` a Bvh built before over this mesh (e.g.
+    /// Bvh<T>::load of a file saved from mesh_bvh(id)): nothing is built, instances share it as
+    /// usual. Throws std::invalid_argument unless `bvh` holds exactly the triangles of `mesh` that
+    /// a ray can hit, each once, vertex for vertex (O(triangles), far cheaper than a build).
+    MeshId add_mesh(Mesh<T> mesh, std::uint32_t material_id, Bvh<T> bvh) {
+        return add_mesh_entry(std::move(mesh), material_id, [&bvh](const Mesh<T>& m) {
+            check_built_over(bvh, m);
+            return std::make_shared<const Bvh<T>>(std::move(bvh));
+        });
     }
 
     /// Places mesh `id` again, moved by `to_world` (any affine transform with det ≠ 0). Its faces
@@ -722,6 +723,51 @@ public:
     }
 
 private:
+    // add_mesh with the mesh's Bvh from make_bvh(stored mesh).
+    template <class MakeBvh>
+    MeshId add_mesh_entry(Mesh<T> mesh, std::uint32_t material_id, MakeBvh&& make_bvh) {
+        mesh.validate();
+        MeshEntry entry;
+        entry.largest_material_id =
+            mesh.material.empty() ? 0 : *std::max_element(mesh.material.begin(), mesh.material.end());
+        (void)material(material_id + entry.largest_material_id);
+        entry.material = material_id;
+        entry.mesh = std::make_shared<const Mesh<T>>(std::move(mesh));
+        entry.bvh = make_bvh(*entry.mesh);
+        meshes_.push_back(std::move(entry));
+        const MeshId id{static_cast<std::uint32_t>(meshes_.size() - 1)};
+        (void)add_instance(id, Transform<T>::identity());
+        return id;
+    }
+    // Throws std::invalid_argument unless `bvh`'s blocks hold the triangles of `mesh` a ray can
+    // hit (Bvh::bounds usable), each once, with the same vertex bits.
+    static void check_built_over(const Bvh<T>& bvh, const Mesh<T>& mesh) {
+        const auto fail = [](const std::string& what) {
+            return std::invalid_argument("isin::Scene::add_mesh: the Bvh is not this mesh's: " + what);
+        };
+        std::vector<bool> held(mesh.size(), false);
+        for (std::size_t l = 0; l < bvh.leaf_count(); ++l) {
+            const auto& block = bvh.blocks()[l];
+            for (std::uint32_t k = 0; k < bvh.tree().leaves()[l].count; ++k) {
+                const std::uint32_t i = block.primitive[k];
+                if (i >= mesh.size() || held[i])
+                    throw fail("triangle " + std::to_string(i) + (i >= mesh.size() ? " is beyond the mesh" : " twice"));
+                held[i] = true;
+                const Triangle<T> tri = mesh.triangle(i);
+                const Vertex<T>* vs[3] = {&tri.v0, &tri.v1, &tri.v2};
+                for (int v = 0; v < 3; ++v)
+                    for (int a = 0; a < 3; ++a) {
+                        const T x = component(*vs[v], a);
+                        if (std::memcmp(&x, &block.v[v][a][k], sizeof(T)) != 0)
+                            throw fail("triangle " + std::to_string(i) + " has other vertices");
+                    }
+            }
+        }
+        for (std::size_t i = 0; i < mesh.size(); ++i)
+            if (!held[i] && Bvh<T>::bounds(mesh.triangle(i)).usable())
+                throw fail("triangle " + std::to_string(i) + " is missing");
+    }
+
     struct MeshEntry {
         std::shared_ptr<const Mesh<T>> mesh; // shared by copies of the scene
         std::shared_ptr<const Bvh<T>> bvh;

@@ -1,8 +1,10 @@
 // Writes the seed corpora of isin's fuzz targets (scripts/fuzz.sh): valid files of every form the
 // readers take, small, so that libFuzzer starts from deep inside each format.
 //   make_seeds DIR   →   DIR/image (PNG of every colour type and depth, interlaced or not, JPEG,
-//                        PPM), DIR/ply (ASCII and binary, every property type), DIR/obj
+//                        PPM), DIR/ply (ASCII and binary, every property type), DIR/obj,
+//                        DIR/bvh (saved Bvhs, float and double)
 #define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
+#include <isin/bvh/serialize.hpp>
 #include <isin/image_io.hpp>
 
 #include <cstdint>
@@ -111,6 +113,28 @@ void put_le(std::string& s, V v) {
     s.append(reinterpret_cast<const char*>(b), sizeof v);
 }
 
+template <class T>
+void save_bvhs(const std::filesystem::path& dir, const std::string& precision) {
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    const auto soup = [&](int n, double size) {
+        std::vector<isin::Triangle<T>> tris;
+        for (int i = 0; i < n; ++i) {
+            const double c[3] = {uni(rng) * 4, uni(rng) * 4, uni(rng) * 4};
+            const auto p = [&] {
+                return isin::Vertex<T>{T(c[0] + size * uni(rng)), T(c[1] + size * uni(rng)), T(c[2] + size * uni(rng))};
+            };
+            tris.push_back({p(), p(), p()});
+        }
+        return tris;
+    };
+    isin::BvhOptions small_leaves;
+    small_leaves.leaf_size = 1;
+    isin::Bvh<T>(soup(0, 1)).save((dir / (precision + "-empty.bvh")).string());
+    isin::Bvh<T>(soup(1, 1)).save((dir / (precision + "-one.bvh")).string());
+    isin::Bvh<T>(soup(12, 0.5)).save((dir / (precision + "-few.bvh")).string());
+    isin::Bvh<T>(soup(20, 0.3), small_leaves).save((dir / (precision + "-deep.bvh")).string());
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -119,7 +143,7 @@ int main(int argc, char** argv) {
         return 2;
     }
     const std::filesystem::path dir = argv[1];
-    for (const char* sub : {"image", "ply", "obj"}) std::filesystem::create_directories(dir / sub);
+    for (const char* sub : {"image", "ply", "obj", "bvh"}) std::filesystem::create_directories(dir / sub);
 
     // Images: PNG of every colour type × allowed depth, plain and interlaced; JPEG; PPM.
     const struct {
@@ -179,6 +203,10 @@ int main(int argc, char** argv) {
                                    "g back\nf 1/1 2/2 6/3 5/1\nf -1 -2 -3\nf 4 8 7 3\n");
     save(dir / "obj" / "numbers.obj", "v 1.5e+3 -2.25E-2 .5\r\nv 0e500 1e-400 +3.\r\nv 1 2 3 1\r\nf 1 2 3\r\n");
     save(dir / "obj" / "forward.obj", "f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\np 3\nvp 0.5 0.5\n");
+
+    // Bvh files (Bvh::save): empty, one triangle, a few leaves, and a tree of several levels.
+    save_bvhs<float>(dir / "bvh", "float");
+    save_bvhs<double>(dir / "bvh", "double");
     std::printf("seeds written to %s\n", dir.string().c_str());
     return 0;
 }

@@ -18,7 +18,9 @@ namespace isin {
 namespace detail {
 template <class T>
 class BvhBuilder;
-}
+template <class T>
+class BvhFile;
+} // namespace detail
 
 /// Build options of a Bvh.
 struct BvhOptions {
@@ -150,6 +152,7 @@ public:
 
 private:
     friend class detail::BvhBuilder<T>;
+    friend class detail::BvhFile<T>; // loads a saved tree (serialize.hpp)
 
     [[nodiscard]] static Box<T> child_box(const Node& n, int k) noexcept {
         Box<T> b;

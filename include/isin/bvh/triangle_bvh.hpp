@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <limits>
 #include <new>
+#include <string>
 #include <type_traits>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "../indexed_mesh.hpp"
 #include "../point_hit.hpp"
 #include "../ray.hpp"
+#include "../read_limits.hpp"
 #include "../triangle.hpp"
 #include "build.hpp"
 #include "closest_point.hpp"
@@ -256,6 +258,15 @@ public:
                blocks_.size() * sizeof(typename TriangleBlocks<T>::Block);
     }
 
+    /// Writes the Bvh to the file `path` (docs/bvh_format.md), atomically; throws BvhFileError (a
+    /// std::runtime_error) naming the file. Defined in bvh/serialize.hpp: include it to call it.
+    void save(const std::string& path) const;
+    /// The Bvh saved in the file `path`, checked (sizes, checksum, every index) and not rebuilt;
+    /// throws BvhFileError naming the file and what is wrong. Defined in bvh/serialize.hpp.
+    [[nodiscard]] static Bvh load(const std::string& path, ReadLimits limits = {});
+    /// As load, from `size` bytes at `data` (a file the caller read or mapped), which it copies.
+    [[nodiscard]] static Bvh load_from_memory(const void* data, std::size_t size, ReadLimits limits = {});
+
     /// The box of a triangle; empty for one no ray can hit (non-finite or zero area), which the
     /// build leaves out.
     [[nodiscard]] static Box<T> bounds(const Triangle<T>& tri) noexcept {
@@ -269,6 +280,9 @@ public:
     }
 
 private:
+    friend class detail::BvhFile<T>; // save and load (serialize.hpp)
+    Bvh() = default;
+
     // Rays [first, …) of a stream.
     [[nodiscard]] static const Ray<T>* rays_from(const Ray<T>* rays, std::size_t first) noexcept {
         return rays + first;

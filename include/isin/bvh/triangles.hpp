@@ -154,6 +154,8 @@ public:
     [[nodiscard]] std::size_t size() const noexcept { return blocks_.size(); }
 
 private:
+    friend class detail::BvhFile<T>; // loads saved blocks (serialize.hpp)
+
     template <class TriangleOf>
     static void fill(Block& b, const BvhTree<T>& tree, const typename BvhTree<T>::Leaf& leaf,
                      const TriangleOf& triangle_of) {

@@ -1,0 +1,509 @@
+#pragma once
+/// isin — saving a Bvh to a file and loading it back without building (docs/bvh_format.md):
+/// Bvh<T>::save, Bvh<T>::load and Bvh<T>::load_from_memory. The file holds what traversal reads
+/// (nodes, leaves, primitive order, leaf blocks) as little-endian arrays in the one layout every
+/// code path reads (8-wide nodes, 8-lane blocks), after a header and its own checksum, and ends
+/// with an XXH64 checksum of every byte before it. Loading trusts nothing: sizes are checked
+/// against the file's length before anything is allocated, the checksum before anything is
+/// used, and every index, count and reference of the tree before the Bvh is returned.
+///
+///     isin::Bvh<float> bvh{mesh};
+///     bvh.save("model.bvh");                                   // once
+///     auto loaded = isin::Bvh<float>::load("model.bvh");       // at every start: same hits
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "../detail/file.hpp"
+#include "../read_limits.hpp"
+#include "triangle_bvh.hpp"
+
+namespace isin {
+
+/// A Bvh file that cannot be written or read: what() names the file and says what is wrong
+/// (truncated, wrong precision, wrong version, checksum, index out of range, …).
+class BvhFileError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+namespace detail {
+
+/// XXH64 (Yann Collet's xxHash, 64-bit form, as its specification defines it), fed in pieces:
+/// the checksum of Bvh files. Four independent lanes of 8 bytes make it run at several bytes a
+/// cycle, so checking a file costs little beside reading it.
+class Xxh64 {
+public:
+    explicit Xxh64(std::uint64_t seed = 0) noexcept : v_{seed + p1 + p2, seed + p2, seed, seed - p1}, seed_(seed) {}
+
+    /// Adds n bytes at p.
+    void update(const unsigned char* p, std::size_t n) noexcept {
+        total_ += n;
+        if (buffered_ + n < 32) {
+            if (n) std::memcpy(buffer_ + buffered_, p, n);
+            buffered_ += n;
+            return;
+        }
+        if (buffered_) {
+            const std::size_t fill = 32 - buffered_;
+            std::memcpy(buffer_ + buffered_, p, fill);
+            stripe(buffer_);
+            p += fill, n -= fill, buffered_ = 0;
+        }
+        std::uint64_t v0 = v_[0], v1 = v_[1], v2 = v_[2], v3 = v_[3];
+        for (; n >= 32; p += 32, n -= 32) {
+            v0 = round(v0, read64(p)), v1 = round(v1, read64(p + 8));
+            v2 = round(v2, read64(p + 16)), v3 = round(v3, read64(p + 24));
+        }
+        v_[0] = v0, v_[1] = v1, v_[2] = v2, v_[3] = v3;
+        if (n) std::memcpy(buffer_, p, n);
+        buffered_ = n;
+    }
+
+    /// The checksum of everything added so far.
+    [[nodiscard]] std::uint64_t digest() const noexcept {
+        std::uint64_t h;
+        if (total_ >= 32) {
+            h = rotl(v_[0], 1) + rotl(v_[1], 7) + rotl(v_[2], 12) + rotl(v_[3], 18);
+            for (const std::uint64_t v : v_) h = (h ^ round(0, v)) * p1 + p4;
+        } else {
+            h = seed_ + p5;
+        }
+        h += total_;
+        const unsigned char* p = buffer_;
+        std::size_t n = buffered_;
+        for (; n >= 8; p += 8, n -= 8) h = rotl(h ^ round(0, read64(p)), 27) * p1 + p4;
+        if (n >= 4) h = rotl(h ^ (std::uint64_t(read32(p)) * p1), 23) * p2 + p3, p += 4, n -= 4;
+        for (; n; ++p, --n) h = rotl(h ^ (std::uint64_t(*p) * p5), 11) * p1;
+        h ^= h >> 33, h *= p2, h ^= h >> 29, h *= p3, h ^= h >> 32;
+        return h;
+    }
+
+    /// The checksum of n bytes at p.
+    [[nodiscard]] static std::uint64_t of(const unsigned char* p, std::size_t n, std::uint64_t seed = 0) noexcept {
+        Xxh64 h(seed);
+        h.update(p, n);
+        return h.digest();
+    }
+
+private:
+    static constexpr std::uint64_t p1 = 0x9E3779B185EBCA87u, p2 = 0xC2B2AE3D27D4EB4Fu, p3 = 0x165667B19E3779F9u,
+                                   p4 = 0x85EBCA77C2B2AE63u, p5 = 0x27D4EB2F165667C5u;
+    static std::uint64_t rotl(std::uint64_t x, int r) noexcept { return (x << r) | (x >> (64 - r)); }
+    static std::uint64_t round(std::uint64_t acc, std::uint64_t lane) noexcept {
+        return rotl(acc + lane * p2, 31) * p1; // XXH64: acc = rotl(acc + lane·P2, 31)·P1
+    }
+    static std::uint64_t read64(const unsigned char* p) noexcept {
+        std::uint64_t v = 0;
+        for (int i = 7; i >= 0; --i) v = (v << 8) | p[i]; // little-endian on every host (one load where it is)
+        return v;
+    }
+    static std::uint32_t read32(const unsigned char* p) noexcept {
+        return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24;
+    }
+    void stripe(const unsigned char* p) noexcept {
+        for (int i = 0; i < 4; ++i) v_[i] = round(v_[i], read64(p + 8 * i));
+    }
+
+    std::uint64_t v_[4];
+    std::uint64_t seed_;
+    std::uint64_t total_ = 0;
+    unsigned char buffer_[32] = {};
+    std::size_t buffered_ = 0;
+};
+
+/// Whether this host stores numbers little-endian, as Bvh files do.
+[[nodiscard]] inline bool host_little_endian() noexcept {
+    const std::uint32_t one = 1;
+    unsigned char first;
+    std::memcpy(&first, &one, 1);
+    return first == 1;
+}
+
+/// Reverses the bytes of each of `count` words of `size` bytes at p (4 or 8): host order ↔
+/// little-endian on a big-endian host.
+inline void swap_words(unsigned char* p, std::size_t count, std::size_t size) noexcept {
+    for (std::size_t i = 0; i < count; ++i, p += size)
+        for (std::size_t a = 0, b = size - 1; a < b; ++a, --b) std::swap(p[a], p[b]);
+}
+
+/// What BvhFile::decode reads from: bytes in memory.
+struct MemorySource {
+    const unsigned char* p;
+    std::size_t left;
+    std::string error; // always empty: running out is truncation
+    /// The next n bytes into `to`; false when fewer are left.
+    bool read(void* to, std::size_t n) noexcept {
+        if (n > left) return false;
+        if (n) std::memcpy(to, p, n);
+        p += n, left -= n;
+        return true;
+    }
+};
+
+#if ISIN_DETAIL_POSIX_FILES
+/// What BvhFile::decode reads from: an open file, read straight into the Bvh's arrays (no copy of
+/// the whole file is held).
+struct FileSource {
+    int fd;
+    std::string error; // why a read failed, or empty when the file ended
+    /// The next n bytes into `to`; false when the file ends first or a read fails.
+    bool read(void* to, std::size_t n) {
+        auto* b = static_cast<unsigned char*>(to);
+        while (n) {
+            const ssize_t got = ::read(fd, b, n);
+            if (got < 0 && errno == EINTR) continue;
+            if (got < 0) error = "cannot read: " + errno_text(errno);
+            if (got <= 0) return false;
+            b += got, n -= std::size_t(got);
+        }
+        return true;
+    }
+};
+#endif
+
+/// The file of a Bvh<T> (docs/bvh_format.md): its encoder and its checking decoder.
+template <class T>
+class BvhFile {
+public:
+    using Tree = BvhTree<T>;
+    using Node = typename Tree::Node;
+    using Leaf = typename Tree::Leaf;
+    using Block = typename TriangleBlocks<T>::Block;
+
+    static constexpr char magic[8] = {'i', 's', 'i', 'n', '-', 'b', 'v', 'h'};
+    static constexpr std::uint32_t version = 1;
+    static constexpr std::size_t header_bytes = 88, checksum_bytes = 8;
+    // A record holds a struct's fields in order, without the padding alignas adds at its end.
+    static constexpr std::size_t node_bytes = 48 * sizeof(T) + 32, leaf_bytes = 8, primitive_bytes = 4,
+                                 block_bytes = 72 * sizeof(T) + 32;
+    static_assert(offsetof(Node, hi) == 24 * sizeof(T) && offsetof(Node, child) == 48 * sizeof(T));
+    static_assert(offsetof(Block, primitive) == 72 * sizeof(T) && sizeof(Leaf) == leaf_bytes);
+
+    /// The bytes of `bvh`'s file.
+    [[nodiscard]] static std::vector<unsigned char> encode(const Bvh<T>& bvh) {
+        const Tree& tree = bvh.tree_;
+        const std::uint64_t nodes = tree.nodes_.size(), leaves = tree.leaves_.size(),
+                            primitives = tree.primitives_.size();
+        std::vector<unsigned char> out(std::size_t(file_bytes(nodes, leaves, primitives)));
+        unsigned char* p = out.data();
+        std::memcpy(p, magic, 8);
+        put32(p + 8, version);
+        put32(p + 12, std::uint32_t(header_bytes));
+        put32(p + 16, std::uint32_t(sizeof(T)));
+        put32(p + 20, 8); // children a node
+        put32(p + 24, 8); // triangles a block
+        put32(p + 28, std::uint32_t(tree.depth()));
+        put64(p + 32, nodes);
+        put64(p + 40, leaves);
+        put64(p + 48, primitives);
+        put_double(p + 56, double(tree.bound_));
+        put_double(p + 64, double(tree.leaf_scale_));
+        put64(p + 72, out.size());
+        put64(p + 80, Xxh64::of(p, 80));
+        p += header_bytes;
+        for (const Node& n : tree.nodes_) p = put_record(p, &n, node_bytes, 48);
+        p = put_array(p, tree.leaves_.data(), leaves * leaf_bytes);
+        p = put_array(p, tree.primitives_.data(), primitives * primitive_bytes);
+        for (std::size_t k = 0; k < leaves; ++k) p = put_record(p, &bvh.blocks_[k], block_bytes, 72);
+        put64(p, Xxh64::of(out.data(), out.size() - checksum_bytes));
+        return out;
+    }
+
+    /// The Bvh in the `size` bytes `source` holds (MemorySource, FileSource), a file named `name`
+    /// in messages; throws BvhFileError. The file's parts are read straight into the Bvh's arrays
+    /// (records with padding through a small buffer), each piece summed while it is in cache.
+    template <class Source>
+    [[nodiscard]] static Bvh<T> decode(Source& source, std::uint64_t size, const std::string& name,
+                                       const ReadLimits& limits) {
+        const auto fail = [&name](const std::string& what) {
+            return BvhFileError("isin Bvh file " + name + ": " + what);
+        };
+        if (!detail::file_too_large(size, limits).empty()) throw fail(detail::file_too_large(size, limits));
+        if (size == 0) throw fail("is empty");
+        unsigned char data[header_bytes] = {};
+        const auto read = [&](void* to, std::size_t n) {
+            if (!source.read(to, n)) throw fail(source.error.empty() ? "truncated while it was read" : source.error);
+        };
+        read(data, std::size_t(std::min<std::uint64_t>(size, header_bytes)));
+        if (size < 12 || std::memcmp(data, magic, 8) != 0)
+            throw fail(size < 12 && std::memcmp(data, magic, std::min<std::size_t>(size, 8)) == 0
+                           ? "truncated: " + std::to_string(size) + " bytes, less than a header"
+                           : "is not a Bvh file (its first 8 bytes are not \"isin-bvh\")");
+        if (get32(data + 8) != version)
+            throw fail("has format version " + std::to_string(get32(data + 8)) + "; this isin reads version " +
+                       std::to_string(version));
+        if (size < header_bytes)
+            throw fail("truncated: " + std::to_string(size) + " bytes, less than its header's " +
+                       std::to_string(header_bytes));
+        if (get64(data + 80) != Xxh64::of(data, 80)) throw fail("checksum mismatch in its header (a damaged file)");
+        if (get32(data + 12) != header_bytes)
+            throw fail("has a header of " + std::to_string(get32(data + 12)) + " bytes; version 1 has " +
+                       std::to_string(header_bytes));
+        if (get32(data + 16) != sizeof(T))
+            throw fail("wrong precision: it holds a Bvh<" + precision_name(get32(data + 16)) + ">, not a Bvh<" +
+                       precision_name(sizeof(T)) + ">");
+        if (get32(data + 20) != 8 || get32(data + 24) != 8)
+            throw fail("has nodes of " + std::to_string(get32(data + 20)) + " children and blocks of " +
+                       std::to_string(get32(data + 24)) + " triangles; every code path of this isin reads 8 and 8");
+        const std::uint32_t depth = get32(data + 28);
+        const std::uint64_t nodes = get64(data + 32), leaves = get64(data + 40), primitives = get64(data + 48);
+        // References are 31 bits (leaf_bit), leaf ranges 32; an empty tree has nothing at all.
+        if (nodes >= Tree::leaf_bit || leaves >= Tree::leaf_bit || primitives > 0xffffffffu)
+            throw fail("count out of range: " + std::to_string(nodes) + " nodes, " + std::to_string(leaves) +
+                       " leaves, " + std::to_string(primitives) + " primitives");
+        if ((nodes == 0) != (leaves == 0) || (nodes == 0) != (primitives == 0) || (nodes == 0) != (depth == 0))
+            throw fail("inconsistent counts: " + std::to_string(nodes) + " nodes, " + std::to_string(leaves) +
+                       " leaves, " + std::to_string(primitives) + " primitives, depth " + std::to_string(depth));
+        if (depth > std::uint32_t(Tree::depth_limit))
+            throw fail("depth " + std::to_string(depth) + " is beyond the limit of " +
+                       std::to_string(Tree::depth_limit));
+        const std::uint64_t expected = file_bytes(nodes, leaves, primitives);
+        if (get64(data + 72) != expected)
+            throw fail("its header gives a length of " + std::to_string(get64(data + 72)) + " bytes, its counts " +
+                       std::to_string(expected));
+        if (size < expected)
+            throw fail("truncated: " + std::to_string(size) + " of " + std::to_string(expected) + " bytes");
+        if (size > expected)
+            throw fail("has " + std::to_string(size - expected) + " bytes after its end (" + std::to_string(expected) +
+                       " bytes)");
+        const double bound = get_double(data + 56), leaf_scale = get_double(data + 64);
+        if (!(double(T(bound)) == bound && bound >= 0.0) || !(double(T(leaf_scale)) == leaf_scale && leaf_scale >= 0.0))
+            throw fail("bound or leaf scale out of range");
+
+        Bvh<T> bvh;
+        Tree& tree = bvh.tree_;
+        Xxh64 sum;
+        sum.update(data, header_bytes);
+        // Read and summed a piece at a time: arrays in pieces of 64 KiB, records 256 at a time.
+        const auto read_array = [&](void* array, std::size_t bytes) {
+            constexpr std::size_t piece = std::size_t(1) << 16;
+            for (std::size_t done = 0; done < bytes; done += piece) {
+                unsigned char* const to = static_cast<unsigned char*>(array) + done;
+                const std::size_t n = std::min(piece, bytes - done);
+                read(to, n);
+                sum.update(to, n);
+            }
+        };
+        std::vector<unsigned char> buffer;
+        const auto read_records = [&](auto* records, std::size_t count, std::size_t bytes, std::size_t reals) {
+            buffer.resize(std::min<std::size_t>(count, 256) * bytes);
+            for (std::size_t i = 0; i < count;) {
+                const std::size_t end = std::min<std::size_t>(count, i + 256);
+                read(buffer.data(), (end - i) * bytes);
+                sum.update(buffer.data(), (end - i) * bytes);
+                for (const unsigned char* p = buffer.data(); i < end; ++i, p += bytes)
+                    get_record(&records[i], p, bytes, reals);
+            }
+        };
+        // On huge pages where the kernel has them, as the build's arrays (huge_pages.hpp).
+        detail::reserve_huge_pages(tree.nodes_, std::size_t(nodes));
+        detail::reserve_huge_pages(tree.leaves_, std::size_t(leaves));
+        detail::reserve_huge_pages(tree.primitives_, std::size_t(primitives));
+        tree.nodes_.resize(std::size_t(nodes));
+        read_records(tree.nodes_.data(), std::size_t(nodes), node_bytes, 48);
+        tree.leaves_.resize(std::size_t(leaves));
+        read_array(tree.leaves_.data(), std::size_t(leaves) * leaf_bytes);
+        tree.primitives_.resize(std::size_t(primitives));
+        read_array(tree.primitives_.data(), std::size_t(primitives) * primitive_bytes);
+        auto& blocks = bvh.blocks_.blocks_;
+        blocks.resize(std::size_t(leaves));
+        if (sizeof(Block) == block_bytes)
+            read_array(blocks.data(), std::size_t(leaves) * block_bytes);
+        else
+            read_records(blocks.data(), std::size_t(leaves), block_bytes, 72);
+        unsigned char stored[checksum_bytes];
+        read(stored, checksum_bytes);
+        if (sum.digest() != get64(stored)) throw fail("checksum mismatch (a damaged file)");
+        if (!host_little_endian()) {
+            swap_words(reinterpret_cast<unsigned char*>(tree.leaves_.data()), 2 * tree.leaves_.size(), 4);
+            swap_words(reinterpret_cast<unsigned char*>(tree.primitives_.data()), tree.primitives_.size(), 4);
+            if (sizeof(Block) == block_bytes)
+                for (Block& b : blocks) swap_record(&b, 72);
+        }
+        tree.bound_ = T(bound), tree.leaf_scale_ = T(leaf_scale);
+        const std::string wrong = check(bvh, depth);
+        if (!wrong.empty()) throw fail(wrong);
+        return bvh;
+    }
+
+private:
+    // The length of a file of these counts (each below 2³², so no overflow).
+    static std::uint64_t file_bytes(std::uint64_t nodes, std::uint64_t leaves, std::uint64_t primitives) noexcept {
+        return header_bytes + nodes * node_bytes + leaves * (leaf_bytes + block_bytes) + primitives * primitive_bytes +
+               checksum_bytes;
+    }
+
+    // Why the tree and blocks of a decoded Bvh are not a Bvh's, or "": every reference inside its
+    // arrays, each node and leaf reached exactly once from the root down (children after their
+    // parent, so no cycle), no deeper than `depth` and the traversal stack, empty slots with the
+    // empty box (which no ray enters, so no walk follows them), the root's bounds as
+    // `bound`, each block holding its leaf's primitives, padded as the build pads.
+    static std::string check(const Bvh<T>& bvh, std::uint32_t depth) {
+        const Tree& tree = bvh.tree_;
+        const std::size_t nodes = tree.nodes_.size(), leaves = tree.leaves_.size();
+        if (nodes == 0) return "";
+        std::vector<std::uint8_t> level(nodes, 0), reached(leaves, 0);
+        level[0] = 1;
+        std::uint32_t deepest = 0;
+        for (std::size_t i = 0; i < nodes; ++i) {
+            if (!level[i]) return "index out of range: node " + std::to_string(i) + " is not reached from the root";
+            deepest = std::max<std::uint32_t>(deepest, level[i]);
+            for (int k = 0; k < 8; ++k) {
+                const std::uint32_t c = tree.nodes_[i].child[k];
+                if (c == Tree::empty_child) { // never entered only with the empty box: traversal relies on it
+                    if (!empty_box(tree.nodes_[i], k))
+                        return "node " + std::to_string(i) + " child " + std::to_string(k) + " is empty, its box not";
+                    continue;
+                }
+                const auto at = [&] { return "node " + std::to_string(i) + " child " + std::to_string(k); };
+                if (c & Tree::leaf_bit) {
+                    const std::uint32_t leaf = c & ~Tree::leaf_bit;
+                    if (leaf >= leaves)
+                        return "index out of range: " + at() + " is leaf " + std::to_string(leaf) + " of " +
+                               std::to_string(leaves);
+                    if (reached[leaf]++) return at() + ": leaf " + std::to_string(leaf) + " reached twice";
+                } else {
+                    if (c <= i || c >= nodes)
+                        return "index out of range: " + at() + " is node " + std::to_string(c) + " (after " +
+                               std::to_string(i) + ", before " + std::to_string(nodes) + ")";
+                    if (level[c]) return at() + ": node " + std::to_string(c) + " reached twice";
+                    if (level[i] >= depth) return at() + ": deeper than the depth of " + std::to_string(depth);
+                    level[c] = std::uint8_t(level[i] + 1);
+                }
+            }
+        }
+        if (deepest != depth) return "depth " + std::to_string(deepest) + ", its header says " + std::to_string(depth);
+        for (std::size_t l = 0; l < leaves; ++l)
+            if (!reached[l]) return "index out of range: leaf " + std::to_string(l) + " is not reached from the root";
+        const Box<T> root = tree.bounds();
+        if (T(std::max(max_abs(root.lo), max_abs(root.hi))) != tree.bound_ && root.lo.x <= root.hi.x)
+            return "its bound is not its root's";
+        const std::size_t primitives = tree.primitives_.size();
+        for (std::size_t l = 0; l < leaves; ++l) {
+            const Leaf& leaf = tree.leaves_[l];
+            if (leaf.count < 1 || leaf.count > 8 || leaf.first > primitives || primitives - leaf.first < leaf.count)
+                return "index out of range: leaf " + std::to_string(l) + " holds primitives [" +
+                       std::to_string(leaf.first) + ", +" + std::to_string(leaf.count) + ") of " +
+                       std::to_string(primitives);
+            const Block& b = bvh.blocks_[l];
+            const std::uint32_t* own = &tree.primitives_[leaf.first];
+            for (std::uint32_t k = 0; k < 8; ++k) {
+                const bool padding = k >= leaf.count;
+                bool same = b.primitive[k] == own[padding ? 0 : k];
+                for (std::uint32_t j = 0; j < k && !padding; ++j) same &= b.primitive[j] != b.primitive[k];
+                for (int v = 0; v < 3 && padding; ++v)
+                    for (int a = 0; a < 3; ++a) same &= std::memcmp(&b.v[v][a][k], &b.v[v][a][0], sizeof(T)) == 0;
+                if (!same) return "block " + std::to_string(l) + " lane " + std::to_string(k) + " is not its leaf's";
+            }
+        }
+        return "";
+    }
+
+    // Whether child slot k of n has the empty box the build gives an empty slot (lo = +∞, hi = −∞).
+    [[nodiscard]] static bool empty_box(const Node& n, int k) noexcept {
+        constexpr T inf = std::numeric_limits<T>::infinity();
+        bool empty = true;
+        for (int a = 0; a < 3; ++a) empty &= n.lo[a][k] == inf && n.hi[a][k] == -inf;
+        return empty;
+    }
+
+    [[nodiscard]] static std::string precision_name(std::uint32_t bytes) {
+        return bytes == 4 ? "float" : bytes == 8 ? "double" : std::to_string(bytes) + "-byte reals";
+    }
+
+    static void put32(unsigned char* p, std::uint32_t v) noexcept {
+        for (int i = 0; i < 4; ++i) p[i] = static_cast<unsigned char>(v >> (8 * i));
+    }
+    static void put64(unsigned char* p, std::uint64_t v) noexcept {
+        for (int i = 0; i < 8; ++i) p[i] = static_cast<unsigned char>(v >> (8 * i));
+    }
+    static void put_double(unsigned char* p, double x) noexcept {
+        std::uint64_t v;
+        std::memcpy(&v, &x, 8);
+        put64(p, v);
+    }
+    [[nodiscard]] static std::uint32_t get32(const unsigned char* p) noexcept {
+        std::uint32_t v = 0;
+        for (int i = 3; i >= 0; --i) v = (v << 8) | p[i];
+        return v;
+    }
+    [[nodiscard]] static std::uint64_t get64(const unsigned char* p) noexcept {
+        std::uint64_t v = 0;
+        for (int i = 7; i >= 0; --i) v = (v << 8) | p[i];
+        return v;
+    }
+    [[nodiscard]] static double get_double(const unsigned char* p) noexcept {
+        const std::uint64_t v = get64(p);
+        double x;
+        std::memcpy(&x, &v, 8);
+        return x;
+    }
+    // A record: `reals` values of T, then 8 uint32 (Node, Block), little-endian.
+    static void swap_record(void* record, std::size_t reals) noexcept {
+        auto* b = static_cast<unsigned char*>(record);
+        swap_words(b, reals, sizeof(T));
+        swap_words(b + reals * sizeof(T), 8, 4);
+    }
+    static unsigned char* put_record(unsigned char* p, const void* record, std::size_t bytes, std::size_t reals) {
+        std::memcpy(p, record, bytes);
+        if (!host_little_endian()) swap_record(p, reals);
+        return p + bytes;
+    }
+    static void get_record(void* record, const unsigned char* p, std::size_t bytes, std::size_t reals) noexcept {
+        std::memcpy(record, p, bytes);
+        if (!host_little_endian()) swap_record(record, reals);
+    }
+    // Arrays of uint32 (leaves, primitives; swapped here, and by decode after the sum).
+    static unsigned char* put_array(unsigned char* p, const void* array, std::size_t bytes) {
+        if (bytes) std::memcpy(p, array, bytes);
+        if (!host_little_endian()) swap_words(p, bytes / 4, 4);
+        return p + bytes;
+    }
+};
+
+} // namespace detail
+
+template <class T>
+void Bvh<T>::save(const std::string& path) const {
+    const std::vector<unsigned char> bytes = detail::BvhFile<T>::encode(*this);
+    const std::string why = detail::write_file_atomically(path, bytes);
+    if (!why.empty()) throw BvhFileError("isin Bvh file " + path + ": " + why);
+}
+
+template <class T>
+Bvh<T> Bvh<T>::load(const std::string& path, ReadLimits limits) {
+    const auto fail = [&path](const std::string& why) { return BvhFileError("isin Bvh file " + path + ": " + why); };
+#if ISIN_DETAIL_POSIX_FILES
+    // As read_whole_file (detail/file.hpp): regular files only, the size limit before any read.
+    const detail::Descriptor fd(::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC));
+    if (fd.get() < 0) throw fail("cannot open: " + detail::errno_text(errno));
+    struct stat st {};
+    if (::fstat(fd.get(), &st) != 0) throw fail("cannot read: " + detail::errno_text(errno));
+    if (S_ISDIR(st.st_mode)) throw fail("is a directory");
+    if (!S_ISREG(st.st_mode)) throw fail("is not a regular file (a device, pipe or socket)");
+    detail::FileSource source{fd.get(), {}};
+    return detail::BvhFile<T>::decode(source, std::uint64_t(st.st_size), path, limits);
+#else
+    std::vector<unsigned char> bytes;
+    const std::string why = detail::read_whole_file(path, bytes, limits);
+    if (!why.empty()) throw fail(why);
+    detail::MemorySource source{bytes.data(), bytes.size(), {}};
+    return detail::BvhFile<T>::decode(source, bytes.size(), path, limits);
+#endif
+}
+
+template <class T>
+Bvh<T> Bvh<T>::load_from_memory(const void* data, std::size_t size, ReadLimits limits) {
+    if (!data && size) throw BvhFileError("isin Bvh file (memory): null data of " + std::to_string(size) + " bytes");
+    detail::MemorySource source{static_cast<const unsigned char*>(data), size, {}};
+    return detail::BvhFile<T>::decode(source, size, "(memory)", limits);
+}
+
+} // namespace isin
