@@ -45,6 +45,9 @@ struct ModelOptions {
     bool load_textures = true;                      ///< false: materials keep no textures
     bool compute_normals = false;                   ///< meshes without normals get computed ones
     double crease_angle_degrees = 60;               ///< for compute_normals (see isin::compute_normals)
+    ModelBudget budget;                             ///< totals across the model and the files it names
+    std::vector<std::string> allowed_roots;         ///< directories besides the model's own whose files it may read
+    bool allow_any_file = false;                    ///< true: the model may name any file the process can read
 };
 
 /// A model from a file: see the top of this header.
@@ -57,6 +60,7 @@ struct Model {
     std::vector<Texture<T>> textures;        ///< Material::texture indexes these
     std::vector<std::string> texture_paths;  ///< the file each texture was read from
     std::vector<std::string> warnings;       ///< what was left out, and why
+    std::vector<std::string> files;          ///< every file read for the model, once each, in order
 
     /// Triangles in all meshes.
     [[nodiscard]] std::size_t triangles() const noexcept {
