@@ -106,6 +106,10 @@ inline void obj_build_meshes(const char* who, const std::string& name, const Obj
             order[next[c.faces[f].part]++] = f;
         }
     }
+    std::size_t meshes = 0;
+    for (std::size_t p = 0; p < parts; ++p) meshes += faces_in[p] != faces_in[p + 1] ? std::size_t(1) : std::size_t(0);
+    model.meshes.reserve(meshes);
+    model.names.reserve(meshes);
     bool any_material = false;
     for (const auto& f : c.faces) any_material = any_material || f.material >= 0;
 

@@ -222,16 +222,14 @@ struct ObjCollector {
     }
     /// Makes `name` the current part; false if it would be one more than max_parts.
     [[nodiscard]] bool set_part(const std::string& name) {
-        const auto found = part_ids.find(name);
-        if (found != part_ids.end()) {
-            part = found->second;
-            return true;
-        }
-        if (part_names.size() > max_parts || part_names.size() >= std::numeric_limits<std::uint32_t>::max())
+        const auto [at, added] = part_ids.try_emplace(name, static_cast<std::uint32_t>(part_names.size()));
+        if (added &&
+            (part_names.size() > max_parts || part_names.size() >= std::numeric_limits<std::uint32_t>::max())) {
+            part_ids.erase(at);
             return false;
-        part = static_cast<std::uint32_t>(part_names.size());
-        part_ids.emplace(name, part);
-        part_names.push_back(name);
+        }
+        if (added) part_names.push_back(name);
+        part = at->second;
         return true;
     }
 
