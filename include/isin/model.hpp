@@ -20,6 +20,11 @@
 /// A file's faces without a material use materials[0], a plain grey. A .mtl file or texture that
 /// cannot be read is not an error: the model loads without it and `warnings` says so.
 ///
+/// Files from strangers (docs/robustness.md): the .mtl files and textures a model names are read
+/// only under its own directory (and ModelOptions::allowed_roots, or anywhere with
+/// allow_any_file; symbolic links count where they point), each once whatever its spelling;
+/// `files` lists them. ModelOptions::budget bounds the whole model.
+///
 /// Errors: as load_mesh (MeshError naming the file and line or offset; std::invalid_argument for
 /// an unknown extension); an OBJ that is UTF-16 or binary is a MeshError saying so. A malformed
 /// .mtl is a MeshError naming the .mtl. Declarations only: the code is in isin::io (or the
