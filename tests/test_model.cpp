@@ -550,7 +550,7 @@ TEST_CASE("load_model: ModelBudget leaves out textures and .mtl files over it, r
     TempDir dir("isin-model-");
     write_texture(dir / "a.png"); // 2 pixels each
     write_texture(dir / "b.png");
-    dir.put("model.mtl", "newmtl a\nmap_Kd a.png\nnewmtl b\nmap_Kd b.png\n");
+    dir.put("model.mtl", "newmtl a\nmap_Kd a.png\nnewmtl b\nmap_Kd b.png\nnewmtl b2\nmap_Kd ./b.png\n");
     dir.put("more.mtl", "newmtl c\nKd 1 1 1\n");
     const std::string obj = dir.put("model.obj", std::string("mtllib model.mtl\nmtllib ./more.mtl x\n") +
                                                      textured_triangle + "f 1/1 2/2 3/3\n");
@@ -559,17 +559,19 @@ TEST_CASE("load_model: ModelBudget leaves out textures and .mtl files over it, r
     auto model = isin::load_model<float>(obj, options);
     CHECK(model.textures.size() == 1);
     CHECK(model.materials[2].texture == -1);
+    CHECK(model.materials[3].texture == -1); // refused once, left out again
+    CHECK(count_ending(model.files, "b.png") == 1);
     CHECK(any_contains(model.warnings, "ModelBudget::texture_pixels"));
 
     options = {};
-    options.budget.mtl_bytes = 40; // model.mtl has 44 bytes
+    options.budget.mtl_bytes = 60; // model.mtl has 69 bytes
     model = isin::load_model<float>(obj, options);
     CHECK(model.materials.size() == 2); // more.mtl only
     CHECK(any_contains(model.warnings, "ModelBudget::mtl_bytes"));
     CHECK(count_ending(model.files, "model.mtl") == 0); // refused before it is read
 
     options = {};
-    options.budget.materials = 1; // model.mtl's two left out, more.mtl's one read
+    options.budget.materials = 1; // model.mtl's three left out, more.mtl's one read
     model = isin::load_model<float>(obj, options);
     REQUIRE(model.materials.size() == 2);
     CHECK(model.material_names[1] == "c");

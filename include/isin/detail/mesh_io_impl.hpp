@@ -196,7 +196,7 @@ template <class T>
         return -1;
     }
     int& index = files.memo(found.id);
-    if (index != -1) return index; // decoded before (or refused before: −2)
+    if (index != -1) return index < 0 ? -1 : index; // decoded before, or refused before (−2)
     index = -2;
     const std::string& path = files.path(found.id);
     const std::uint64_t left =
