@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes isin's file readers with libFuzzer (clang, -fsanitize=fuzzer,address,undefined):
-# read_image_from_memory (PNG, JPEG, PPM), the PLY and the OBJ reader (load_mesh_from_memory), and
+# read_image_from_memory (PNG, JPEG, PPM), the PLY and the OBJ reader (load_mesh_from_memory),
+# load_model on an OBJ, its .mtl and a texture written to a temporary directory, and
 # Bvh<T>::load_from_memory (saved Bvhs).
 #   bash scripts/fuzz.sh [SECONDS]      (default 45 per target)
 # Builds the targets in build/fuzz, writes seed corpora there (tests/fuzz/make_seeds, plus

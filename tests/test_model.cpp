@@ -12,6 +12,7 @@
 #include "temp_dir.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -396,4 +397,217 @@ TEST_CASE("render: sRGB output encodes the same intensities with the sRGB curve"
     CHECK(linear(8, 4).r == 128);
     CHECK(srgb(8, 4).r == 188);
     CHECK(srgb(0, 0).r == 0);
+}
+
+// Models from strangers: every file a model names read once whatever its spelling, confined to
+// the allowed directories, within the model's budget.
+namespace {
+
+/// `n` distinct spellings of the relative path `name` ("./" or ".//" per bit of i, then name).
+std::vector<std::string> spellings(int n, int bits, const std::string& name) {
+    std::vector<std::string> out;
+    for (int i = 0; i < n; ++i) {
+        std::string s;
+        for (int b = 0; b < bits; ++b) s += ((i >> b) & 1) ? ".//" : "./";
+        out.push_back(s + name);
+    }
+    return out;
+}
+
+/// How many of `files` end with `name`.
+std::size_t count_ending(const std::vector<std::string>& files, const std::string& name) {
+    std::size_t n = 0;
+    for (const std::string& f : files)
+        n += f.size() >= name.size() && f.compare(f.size() - name.size(), name.size(), name) == 0;
+    return n;
+}
+
+/// Whether any of `texts` contains `part`.
+bool any_contains(const std::vector<std::string>& texts, const std::string& part) {
+    for (const std::string& t : texts)
+        if (t.find(part) != std::string::npos) return true;
+    return false;
+}
+
+const char* const textured_triangle = "v 0 0 5\nv 1 0 5\nv 0 1 5\nvt 0 0\nvt 1 0\nvt 0 1\n";
+
+} // namespace
+
+TEST_CASE_TEMPLATE("load_model: a texture named by 100 spellings, a hard link and its absolute path is decoded once", T,
+                   float, double) {
+    TempDir dir("isin-model-");
+    write_texture(dir / "big.png");
+    std::filesystem::create_hard_link(dir / "big.png", dir / "same.png");
+    std::string mtl;
+    const auto names = spellings(100, 7, "big.png");
+    for (std::size_t i = 0; i < names.size(); ++i)
+        mtl += "newmtl m" + std::to_string(i) + "\nmap_Kd " + names[i] + "\n";
+    mtl += "newmtl linked\nmap_Kd same.png\nnewmtl absolute\nmap_Kd " +
+           std::filesystem::absolute(dir / "big.png").string() + "\nnewmtl upper\nmap_Kd BIG.PNG\n";
+    dir.put("model.mtl", mtl);
+    const auto model = isin::load_model<T>(
+        dir.put("model.obj", std::string("mtllib model.mtl\n") + textured_triangle + "usemtl m0\nf 1/1 2/2 3/3\n"));
+    CHECK(model.warnings.empty());
+    CHECK(model.textures.size() == 1); // decoded once
+    REQUIRE(model.materials.size() == 104);
+    for (std::size_t i = 1; i < model.materials.size(); ++i) CHECK(model.materials[i].texture == 0);
+    REQUIRE(model.files.size() == 3); // the OBJ, the .mtl, the texture: each opened once
+    CHECK(count_ending(model.files, "model.obj") == 1);
+    CHECK(count_ending(model.files, "model.mtl") == 1);
+    CHECK(count_ending(model.files, "big.png") + count_ending(model.files, "same.png") == 1);
+}
+
+TEST_CASE("load_model: a .mtl named by 100 spellings on mtllib lines is read once") {
+    TempDir dir("isin-model-");
+    std::string mtl;
+    for (int i = 0; i < 50; ++i) mtl += "newmtl m" + std::to_string(i) + "\nKd 0.5 0.5 0.5\n";
+    dir.put("amp.mtl", mtl);
+    std::string obj;
+    for (const std::string& s : spellings(100, 7, "amp.mtl")) obj += "mtllib " + s + "\n";
+    obj += "mtllib model.obj\n"; // the model itself: refused as a material file, not read again
+    const auto model = isin::load_model<float>(dir.put("model.obj", obj + textured_triangle + "usemtl m1\nf 1 2 3\n"));
+    CHECK(model.materials.size() == 51);
+    CHECK(model.meshes.size() == 1);
+    CHECK(model.files.size() == 2);
+    CHECK(count_ending(model.files, "amp.mtl") == 1);
+    CHECK(count_ending(model.files, "model.obj") == 1);
+    CHECK(any_contains(model.warnings, "is the model already"));
+}
+
+TEST_CASE("load_model: 20k group names make 20k meshes, each with its name; ModelBudget::meshes bounds them") {
+    TempDir dir("isin-model-");
+    std::string obj = "v 0 0 5\nv 1 0 5\nv 0 1 5\n";
+    for (int i = 0; i < 20000; ++i) obj += "g group" + std::to_string(i) + "\nf 1 2 3\n";
+    obj += "g group7\nf 3 2 1\n"; // a name again adds to its mesh
+    const std::string path = dir.put("groups.obj", obj);
+    const auto model = isin::load_model<float>(path);
+    REQUIRE(model.meshes.size() == 20000);
+    CHECK(model.names[0] == "group0");
+    CHECK(model.names[19999] == "group19999");
+    CHECK(model.meshes[7].size() == 2);
+    CHECK(model.meshes[8].size() == 1);
+    isin::ModelOptions options;
+    options.budget.meshes = 1000;
+    const std::string why = thrown([&] { (void)isin::load_model<float>(path, options); });
+    CHECK(why.find("groups.obj") != std::string::npos);
+    CHECK(why.find("ModelBudget::meshes") != std::string::npos);
+    CHECK_THROWS_AS((void)isin::load_model<float>(path, options), isin::MeshError);
+    options.budget.meshes = 20000;
+    CHECK(isin::load_model<float>(path, options).meshes.size() == 20000);
+}
+
+TEST_CASE("load_model: files outside the model's directory are refused unless allowed, symbolic links too") {
+    TempDir top("isin-model-");
+    std::filesystem::create_directories(top.path / "model" / "sub");
+    std::filesystem::create_directories(top.path / "outside");
+    write_texture(top / "outside/secret.png");
+    top.put("outside/other.mtl", "newmtl other\nKd 1 0 0\n");
+    std::filesystem::create_symlink(top.path / "outside" / "secret.png", top.path / "model" / "link.png");
+    std::filesystem::create_directory_symlink(top.path / "outside", top.path / "model" / "linked_dir");
+    write_texture(top / "model/sub/inside.png");
+    const std::string absolute_secret = std::filesystem::absolute(top.path / "outside" / "secret.png").string();
+    top.put("model/model.mtl", "newmtl up\nmap_Kd ../outside/secret.png\n"
+                               "newmtl absolute\nmap_Kd " +
+                                   absolute_secret +
+                                   "\n"
+                                   "newmtl link\nmap_Kd link.png\n"
+                                   "newmtl dir\nmap_Kd linked_dir/secret.png\n"
+                                   "newmtl system\nmap_Kd /etc/hostname\n"
+                                   "newmtl inside\nmap_Kd sub/../sub/inside.png\n");
+    const std::string obj = top.put("model/model.obj", std::string("mtllib model.mtl\nmtllib ../outside/other.mtl\n") +
+                                                           textured_triangle + "usemtl inside\nf 1/1 2/2 3/3\n");
+    auto model = isin::load_model<float>(obj);
+    REQUIRE(model.materials.size() == 7); // other.mtl left out
+    CHECK(model.textures.size() == 1);
+    CHECK(model.materials[6].texture == 0); // inside
+    for (std::size_t i = 1; i <= 5; ++i) CHECK(model.materials[i].texture == -1);
+    CHECK(model.files.size() == 3); // model.obj, model.mtl, inside.png
+    for (const std::string& f : model.files) {
+        CHECK(f.find("outside") == std::string::npos);
+        CHECK(f.find("hostname") == std::string::npos);
+    }
+    CHECK(model.warnings.size() == 6);
+    CHECK(any_contains(model.warnings, "other.mtl"));
+    CHECK(any_contains(model.warnings, "ModelOptions::allowed_roots"));
+
+    isin::ModelOptions options; // the outside directory allowed: its files are read once each
+    options.allowed_roots = {(top.path / "outside").string()};
+    model = isin::load_model<float>(obj, options);
+    CHECK(model.materials.size() == 8);
+    CHECK(model.textures.size() == 2); // secret.png by four names, inside.png
+    for (std::size_t i = 1; i <= 4; ++i) CHECK(model.materials[i].texture == model.materials[1].texture);
+    CHECK(model.materials[5].texture == -1); // /etc/hostname
+    CHECK(count_ending(model.files, "secret.png") == 1);
+
+    options.allowed_roots.clear();
+    options.allow_any_file = true;
+    model = isin::load_model<float>(obj, options);
+    CHECK(model.textures.size() == 2);
+    CHECK(model.materials[1].texture >= 0);
+}
+
+TEST_CASE("load_model: ModelBudget leaves out textures and .mtl files over it, refuses meshes over it") {
+    TempDir dir("isin-model-");
+    write_texture(dir / "a.png"); // 2 pixels each
+    write_texture(dir / "b.png");
+    dir.put("model.mtl", "newmtl a\nmap_Kd a.png\nnewmtl b\nmap_Kd b.png\nnewmtl b2\nmap_Kd ./b.png\n");
+    dir.put("more.mtl", "newmtl c\nKd 1 1 1\n");
+    const std::string obj = dir.put("model.obj", std::string("mtllib model.mtl\nmtllib ./more.mtl x\n") +
+                                                     textured_triangle + "f 1/1 2/2 3/3\n");
+    isin::ModelOptions options;
+    options.budget.texture_pixels = 3;
+    auto model = isin::load_model<float>(obj, options);
+    CHECK(model.textures.size() == 1);
+    CHECK(model.materials[2].texture == -1);
+    CHECK(model.materials[3].texture == -1); // refused once, left out again
+    CHECK(count_ending(model.files, "b.png") == 1);
+    CHECK(any_contains(model.warnings, "ModelBudget::texture_pixels"));
+
+    options = {};
+    options.budget.mtl_bytes = 60; // model.mtl has 69 bytes
+    model = isin::load_model<float>(obj, options);
+    CHECK(model.materials.size() == 2); // more.mtl only
+    CHECK(any_contains(model.warnings, "ModelBudget::mtl_bytes"));
+    CHECK(count_ending(model.files, "model.mtl") == 0); // refused before it is read
+
+    options = {};
+    options.budget.materials = 1; // model.mtl's three left out, more.mtl's one read
+    model = isin::load_model<float>(obj, options);
+    REQUIRE(model.materials.size() == 2);
+    CHECK(model.material_names[1] == "c");
+    CHECK(any_contains(model.warnings, "ModelBudget::materials"));
+
+    options = {};
+    options.budget.vertices = 2;
+    CHECK_THROWS_AS((void)isin::load_model<float>(obj, options), isin::MeshError);
+    CHECK(thrown([&] { (void)isin::load_model<float>(obj, options); }).find("ModelBudget::vertices") !=
+          std::string::npos);
+    const std::string ply = dir.put("tri.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                               "property float y\nproperty float z\nelement face 1\n"
+                                               "property list uchar int vertex_indices\nend_header\n"
+                                               "0 0 0\n0 1 0\n1 0 0\n3 0 1 2\n");
+    CHECK_THROWS_AS((void)isin::load_model<float>(ply, options), isin::MeshError);
+    options.budget.vertices = 3;
+    CHECK(isin::load_model<float>(ply, options).triangles() == 1);
+}
+
+TEST_CASE_TEMPLATE("load_model PLY: float vertex colours outside [0, 1] are clamped, with a warning", T, float,
+                   double) {
+    TempDir dir("isin-model-");
+    const auto model = isin::load_model<T>(dir.put("c.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                                            "property float x\nproperty float y\nproperty float z\n"
+                                                            "property float red\nproperty float green\n"
+                                                            "property float blue\nelement face 1\n"
+                                                            "property list uchar int vertex_indices\nend_header\n"
+                                                            "0 0 0 2.0 -0.5 0.5\n0 1 0 0.25 0.5 1\n"
+                                                            "1 0 0 1e30 0 0\n3 0 1 2\n"));
+    REQUIRE(model.meshes[0].colors.size() == 3);
+    const auto& c = model.meshes[0].colors;
+    CHECK(c[0].r == T(1));
+    CHECK(c[0].g == T(0));
+    CHECK(c[0].b == T(0.5));
+    CHECK(c[1].r == T(0.25));
+    CHECK(c[2].r == T(1));
+    REQUIRE(model.warnings.size() == 1);
+    CHECK(model.warnings[0].find("2 vertex colours") != std::string::npos);
 }

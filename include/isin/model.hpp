@@ -24,6 +24,11 @@
 /// A file's faces without a material use materials[0], a plain grey. A .mtl file or texture that
 /// cannot be read is not an error: the model loads without it and `warnings` says so.
 ///
+/// Files from strangers (docs/robustness.md): the .mtl files and textures a model names are read
+/// only under its own directory (and ModelOptions::allowed_roots, or anywhere with
+/// allow_any_file; symbolic links count where they point), each once whatever its spelling;
+/// `files` lists them. ModelOptions::budget bounds the whole model.
+///
 /// Errors: as load_mesh (MeshError naming the file and line or offset; std::invalid_argument for
 /// an unknown extension); an OBJ that is UTF-16 or binary is a MeshError saying so. A malformed
 /// .mtl is a MeshError naming the .mtl. Declarations only: the code is in isin::io (or the
@@ -49,6 +54,9 @@ struct ModelOptions {
     bool load_textures = true;                      ///< false: materials keep no textures
     bool compute_normals = false;                   ///< meshes without normals get computed ones
     double crease_angle_degrees = 60;               ///< for compute_normals (see isin::compute_normals)
+    ModelBudget budget;                             ///< totals across the model and the files it names
+    std::vector<std::string> allowed_roots;         ///< directories besides the model's own whose files it may read
+    bool allow_any_file = false;                    ///< true: the model may name any file the process can read
 };
 
 /// A model from a file: see the top of this header.
@@ -61,6 +69,7 @@ struct Model {
     std::vector<Texture<T>> textures;        ///< Material::texture indexes these
     std::vector<std::string> texture_paths;  ///< the file each texture was read from
     std::vector<std::string> warnings;       ///< what was left out, and why
+    std::vector<std::string> files;          ///< every file read for the model, once each, in order
 
     /// Triangles in all meshes.
     [[nodiscard]] std::size_t triangles() const noexcept {

@@ -1,8 +1,8 @@
 // Writes the seed corpora of isin's fuzz targets (scripts/fuzz.sh): valid files of every form the
 // readers take, small, so that libFuzzer starts from deep inside each format.
 //   make_seeds DIR   →   DIR/image (PNG of every colour type and depth, interlaced or not, JPEG,
-//                        PPM), DIR/ply (ASCII and binary, every property type), DIR/obj,
-//                        DIR/bvh (saved Bvhs, float and double)
+//                        PPM), DIR/ply (ASCII and binary, every property type), DIR/obj (one a model
+//                        with its .mtl and texture, for fuzz_obj), DIR/bvh (saved Bvhs, float and double)
 #define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
 #include <isin/bvh/serialize.hpp>
 #include <isin/image_io.hpp>
@@ -202,6 +202,14 @@ int main(int argc, char** argv) {
                                    "g front\nusemtl red\nf 1/1/1 4/2/1 3/3/1 2/1/1\nf 5//1 6//1 7//1 8//1\ns off\n"
                                    "g back\nf 1/1 2/2 6/3 5/1\nf -1 -2 -3\nf 4 8 7 3\n");
     save(dir / "obj" / "numbers.obj", "v 1.5e+3 -2.25E-2 .5\r\nv 0e500 1e-400 +3.\r\nv 1 2 3 1\r\nf 1 2 3\r\n");
+    { // a model in three parts (fuzz_obj writes them as files): OBJ, its .mtl, a texture
+        const std::string text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\ng a\nusemtl m\nf 1/1 2/2 3/3\n"
+                                 "\n%%\nnewmtl m\nKd 1 0.5 0\nmap_Kd ./tex.png\nnewmtl n\nmap_Kd .//tex.png\n\n%%\n";
+        Bytes model(text.begin(), text.end());
+        const Bytes texture = png(3, 2, 2, 8, false);
+        model.insert(model.end(), texture.begin(), texture.end());
+        save(dir / "obj" / "model.obj", model);
+    }
     save(dir / "obj" / "forward.obj", "f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\np 3\nvp 0.5 0.5\n");
 
     // Bvh files (Bvh::save): empty, one triangle, a few leaves, and a tree of several levels.

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
+#include <new>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -199,7 +200,8 @@ void check_image_output(const std::string& path, int width, int height) {
 /// detail/image_check.hpp), the size from the header against limits.max_pixels before any
 /// decoding, and truncated data is an error. Throws std::runtime_error naming `name` and the
 /// reason (stb's failure reason for PNG/JPEG it refuses).
-Image read_image_from_memory(const void* data, std::size_t size, const ReadLimits& limits, const std::string& name) {
+Image read_image_from_memory(const void* data, std::size_t size, const ReadLimits& limits,
+                             const std::string& name) try {
     const char* who = "isin::read_image";
     const auto* bytes = static_cast<const unsigned char*>(data);
     if (!bytes) size = 0;
@@ -240,13 +242,20 @@ Image read_image_from_memory(const void* data, std::size_t size, const ReadLimit
                              "not a binary PPM; reading PNG or JPEG needs the stb "
                              "headers (Debian/Ubuntu: install libstb-dev)");
 #endif
+} catch (const std::bad_alloc&) { // stb's allocations fail as null, ours as bad_alloc
+    throw detail::file_error("isin::read_image", name, "out of memory while decoding");
 }
 
 /// Reads a PNG, JPEG or binary PPM file as read_image_from_memory does; only regular files of
 /// at most limits.max_file_bytes are read. Throws std::runtime_error naming `path`.
 Image read_image(const std::string& path, const ReadLimits& limits) {
     std::vector<unsigned char> bytes;
-    const std::string why = detail::read_whole_file(path, bytes, limits);
+    std::string why;
+    try {
+        why = detail::read_whole_file(path, bytes, limits);
+    } catch (const std::bad_alloc&) {
+        why = "out of memory while reading";
+    }
     if (!why.empty()) throw detail::file_error("isin::read_image", path, why);
     return read_image_from_memory(bytes.data(), bytes.size(), limits, path);
 }

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <exception>
 #include <limits>
+#include <new>
 #include <unordered_map>
 #include <utility>
 #include <filesystem>
@@ -16,11 +17,13 @@
 #include <system_error>
 #include <vector>
 
+#include "../image_io.hpp"
 #include "../mesh.hpp"
 #include "../model.hpp"
 #include "../read_limits.hpp"
 #include "../triangle.hpp"
 #include "mesh_text.hpp"
+#include "model_files.hpp"
 #include "obj_impl.hpp"
 #include "ply_impl.hpp"
 
@@ -85,29 +88,10 @@ template <class T>
     return m;
 }
 
-/// A texture path from a .mtl file as a path on this system: '\' as '/'; tried as written, then
-/// with its file name in any letter case (files made on Windows). "" if there is none.
-inline std::string mtl_texture_file(const std::string& dir, std::string name) {
-    std::replace(name.begin(), name.end(), '\\', '/');
-    std::error_code ec;
-    const std::filesystem::path path = std::filesystem::path(dir) / name;
-    if (std::filesystem::is_regular_file(path, ec)) return path.string();
-    const auto lower = [](std::string s) {
-        for (char& ch : s)
-            if (ch >= 'A' && ch <= 'Z') ch = static_cast<char>(ch - 'A' + 'a');
-        return s;
-    };
-    const std::string wanted = lower(path.filename().string());
-    std::filesystem::directory_iterator it(path.parent_path().empty() ? "." : path.parent_path(), ec), end;
-    for (int seen = 0; !ec && it != end && seen < 100000; it.increment(ec), ++seen)
-        if (lower(it->path().filename().string()) == wanted && it->is_regular_file(ec)) return it->path().string();
-    return "";
-}
-
 /// Builds the meshes of an OBJ: one per part (group or object name with faces), vertices shared
 /// within a mesh when their v/vt/vn triples agree, polygons triangulated.
 template <class T>
-inline void obj_build_meshes(const ObjCollector<T>& c, Model<T>& model) {
+inline void obj_build_meshes(const char* who, const std::string& name, const ObjCollector<T>& c, Model<T>& model) {
     const std::size_t parts = c.part_names.size();
     std::vector<std::size_t> faces_in(parts + 1, 0); // counting sort of faces by part, file order kept
     for (const auto& f : c.faces) ++faces_in[f.part + 1];
@@ -122,6 +106,10 @@ inline void obj_build_meshes(const ObjCollector<T>& c, Model<T>& model) {
             order[next[c.faces[f].part]++] = f;
         }
     }
+    std::size_t meshes = 0;
+    for (std::size_t p = 0; p < parts; ++p) meshes += faces_in[p] != faces_in[p + 1] ? std::size_t(1) : std::size_t(0);
+    model.meshes.reserve(meshes);
+    model.names.reserve(meshes);
     bool any_material = false;
     for (const auto& f : c.faces) any_material = any_material || f.material >= 0;
 
@@ -136,6 +124,7 @@ inline void obj_build_meshes(const ObjCollector<T>& c, Model<T>& model) {
     std::unordered_map<ObjVertexKey, std::uint32_t, ObjVertexKeyHash> more;
     std::vector<std::uint32_t> local;
     std::vector<FanRun> runs;
+    std::uint64_t vertices = 0; // in all meshes
     for (std::size_t p = 0; p < parts; ++p) {
         if (faces_in[p] == faces_in[p + 1]) continue;
         Mesh<T> mesh;
@@ -165,6 +154,10 @@ inline void obj_build_meshes(const ObjCollector<T>& c, Model<T>& model) {
                 else
                     slot = more.try_emplace({corner.v, corner.vt, corner.vn}, next).first->second;
                 if (slot == next) {
+                    if (++vertices > c.max_vertices)
+                        throw mesh_error(who, name,
+                                         "the meshes have more than " + std::to_string(c.max_vertices) +
+                                             " vertices (ModelBudget::vertices)");
                     mesh.positions.push_back(c.vertices[static_cast<std::size_t>(corner.v)]);
                     if (has_uv)
                         mesh.uvs.push_back(corner.vt >= 0 ? c.uvs[static_cast<std::size_t>(corner.vt)]
@@ -190,45 +183,73 @@ inline void obj_build_meshes(const ObjCollector<T>& c, Model<T>& model) {
     }
 }
 
+/// The texture `name` of material `m` (a .mtl's map_Kd, relative to `dir`), read and decoded
+/// once whatever its spelling, within the model's budget; its index, or −1 with a warning.
+template <class T>
+[[nodiscard]] int obj_texture(ModelFiles& files, const std::string& dir, std::string name, const std::string& m,
+                              const ModelOptions& options, Model<T>& model, std::vector<std::string>& warnings) {
+    std::replace(name.begin(), name.end(), '\\', '/');
+    const std::string what = "texture '" + name.substr(0, 200) + "' of material '" + m.substr(0, 80) + "'";
+    const ModelFiles::Found found = files.find(dir, name, ModelFileKind::texture, true);
+    if (found.id == ModelFiles::none) {
+        warnings.push_back(what + ": " + found.why);
+        return -1;
+    }
+    int& index = files.memo(found.id);
+    if (index != -1) return index < 0 ? -1 : index; // decoded before, or refused before (−2)
+    index = -2;
+    const std::string& path = files.path(found.id);
+    const std::uint64_t left =
+        files.budget.texture_pixels - std::min(files.budget.texture_pixels, files.texture_pixels);
+    ReadLimits limits = options.limits;
+    const bool budget_bounds = left < limits.max_pixels;
+    if (budget_bounds) limits.max_pixels = left;
+    try {
+        std::string why;
+        const auto decode = [&] { // the file's bytes freed once decoded
+            std::vector<unsigned char> bytes;
+            why = files.read(found.id, bytes);
+            return why.empty() ? read_image_from_memory(bytes.data(), bytes.size(), limits, path) : Image(1, 1);
+        };
+        const Image image = decode();
+        if (!why.empty()) {
+            warnings.push_back(what + ": '" + path + "': " + why);
+            return -1;
+        }
+        files.texture_pixels += std::uint64_t(image.width()) * std::uint64_t(image.height());
+        model.textures.emplace_back(ImageTexture<T>(image, options.textures));
+        model.texture_paths.push_back(path);
+        index = static_cast<int>(model.textures.size() - 1);
+    } catch (const std::bad_alloc&) {
+        warnings.push_back(what + ": '" + path + "': out of memory while decoding");
+    } catch (const std::exception& e) {
+        warnings.push_back(what + ": " + e.what() +
+                           (budget_bounds ? " (" + std::to_string(left) + " pixels left of ModelBudget::texture_pixels)"
+                                          : std::string()));
+    }
+    return index < 0 ? -1 : index;
+}
+
 template <class T>
 [[nodiscard]] Model<T> parse_obj_model(const char* who, const std::string& path, std::string_view text,
-                                       const ModelOptions& options, bool from_file = true) {
+                                       const ModelOptions& options, ModelFiles* files) {
     ObjCollector<T> c;
+    c.max_parts = options.budget.meshes;
+    c.max_vertices = options.budget.vertices;
     const std::size_t slash = path.find_last_of('/');
-    obj_collect<T>(who, path, text, c, slash == std::string::npos ? "" : path.substr(0, slash + 1), &options.limits,
-                   from_file);
+    obj_collect<T>(who, path, text, c, slash == std::string::npos ? "" : path.substr(0, slash + 1), true, files);
     Model<T> model;
-    obj_build_meshes(c, model);
+    obj_build_meshes(who, path, c, model);
     Material<T> fallback;
     fallback.color = {T(0.8), T(0.8), T(0.8)};
     model.materials.push_back(fallback);
     model.material_names.emplace_back();
-    std::vector<std::pair<std::string, int>> loaded; // texture file → index
     for (std::size_t i = 0; i < c.materials.size(); ++i) {
         const tobj::material_t& t = c.materials[i];
         Material<T> m = mtl_material<T>(t);
-        if (options.load_textures && !t.diffuse_texname.empty()) {
-            const std::string file =
-                mtl_texture_file(i < c.material_dirs.size() ? c.material_dirs[i] : "", t.diffuse_texname);
-            auto found = std::find_if(loaded.begin(), loaded.end(), [&](const auto& l) { return l.first == file; });
-            if (file.empty()) {
-                c.warnings.push_back("texture '" + t.diffuse_texname.substr(0, 200) + "' of material '" +
-                                     t.name.substr(0, 80) + "' not found");
-            } else if (found != loaded.end()) {
-                m.texture = found->second;
-            } else {
-                try {
-                    model.textures.emplace_back(ImageTexture<T>::load(file, options.limits, options.textures));
-                    model.texture_paths.push_back(file);
-                    m.texture = static_cast<int>(model.textures.size() - 1);
-                    loaded.emplace_back(file, m.texture);
-                } catch (const std::exception& e) {
-                    c.warnings.push_back(std::string("texture of material '") + t.name.substr(0, 80) +
-                                         "': " + e.what());
-                    loaded.emplace_back(file, -1);
-                }
-            }
-        }
+        if (files && options.load_textures && !t.diffuse_texname.empty())
+            m.texture = obj_texture(*files, i < c.material_dirs.size() ? c.material_dirs[i] : "", t.diffuse_texname,
+                                    t.name, options, model, c.warnings);
         model.materials.push_back(m);
         model.material_names.push_back(t.name);
     }
@@ -239,10 +260,23 @@ template <class T>
 #endif // ISIN_HAVE_TINYOBJLOADER
 
 template <class T>
-[[nodiscard]] Model<T> parse_ply_model(const char* who, const std::string& path, std::string_view file) {
+[[nodiscard]] Model<T> parse_ply_model(const char* who, const std::string& path, std::string_view file,
+                                       const ModelOptions& options) {
+    const PlyHeader h = ply_parse_header(who, path, file);
+    if (h.vertex_count > options.budget.vertices)
+        throw mesh_error(who, path,
+                         std::to_string(h.vertex_count) + " vertices, more than the limit of " +
+                             std::to_string(options.budget.vertices) + " (ModelBudget::vertices)");
     Model<T> model;
     model.meshes.push_back(parse_ply_mesh<T>(who, path, file));
     model.names.push_back(std::filesystem::path(path).stem().string());
+    std::size_t clamped = 0; // Mesh keeps colours in [0, 1]; float properties may hold anything
+    for (Color<T>& color : model.meshes.back().colors) {
+        const Color<T> kept = color;
+        color = {std::clamp(color.r, T(0), T(1)), std::clamp(color.g, T(0), T(1)), std::clamp(color.b, T(0), T(1))};
+        clamped += (kept.r != color.r || kept.g != color.g || kept.b != color.b) ? 1 : 0;
+    }
+    if (clamped > 0) model.warnings.push_back(std::to_string(clamped) + " vertex colours outside [0, 1] clamped to it");
     Material<T> fallback;
     fallback.color = {T(0.8), T(0.8), T(0.8)};
     model.materials.push_back(fallback);
@@ -279,21 +313,32 @@ Model<T> load_model(const std::string& path, const ModelOptions& options) {
     static_assert(std::is_floating_point_v<T>, "isin::load_model needs a floating-point type");
     const char* who = "isin::load_model";
     const std::string ext = detail::lower_extension(path);
-    Model<T> model;
-    if (ext == ".ply") {
-        model = detail::parse_ply_model<T>(who, path, detail::mesh_read_file(who, path, options.limits));
-    } else if (ext == ".obj") {
-#if ISIN_HAVE_TINYOBJLOADER
-        model = detail::parse_obj_model<T>(who, path, detail::mesh_read_file(who, path, options.limits), options);
-#else
-        detail::throw_no_tinyobjloader(who, path);
-#endif
-    } else {
+    if (ext != ".ply" && ext != ".obj")
         throw std::invalid_argument(std::string(who) + ": '" + path + "': unknown extension '" + ext +
                                     "' (use .obj or .ply)");
+#if !ISIN_HAVE_TINYOBJLOADER
+    if (ext == ".obj") detail::throw_no_tinyobjloader(who, path);
+#endif
+    try {
+        detail::ModelFiles files(path, options.allowed_roots, options.allow_any_file, options.limits, options.budget);
+        Model<T> model;
+        {
+            std::string bytes;
+            const std::string why = files.read(0, bytes);
+            if (!why.empty()) throw detail::mesh_error(who, path, why);
+#if ISIN_HAVE_TINYOBJLOADER
+            if (ext == ".obj")
+                model = detail::parse_obj_model<T>(who, path, bytes, options, &files);
+            else
+#endif
+                model = detail::parse_ply_model<T>(who, path, bytes, options);
+        }
+        detail::finish_model(model, options);
+        model.files = std::move(files.opened);
+        return model;
+    } catch (const std::bad_alloc&) {
+        throw detail::mesh_error(who, path, "out of memory while reading the model");
     }
-    detail::finish_model(model, options);
-    return model;
 }
 
 template <class T>
@@ -302,18 +347,22 @@ Model<T> load_model_from_memory(const void* data, std::size_t size, MeshFormat f
     static_assert(std::is_floating_point_v<T>, "isin::load_model needs a floating-point type");
     const char* who = "isin::load_model";
     const std::string_view bytes(data ? static_cast<const char*>(data) : "", data ? size : 0);
-    Model<T> model;
-    if (format == MeshFormat::ply) {
-        model = detail::parse_ply_model<T>(who, name, bytes);
-    } else {
-#if ISIN_HAVE_TINYOBJLOADER
-        model = detail::parse_obj_model<T>(who, name, bytes, options, false);
-#else
-        detail::throw_no_tinyobjloader(who, name);
+#if !ISIN_HAVE_TINYOBJLOADER
+    if (format == MeshFormat::obj) detail::throw_no_tinyobjloader(who, name);
 #endif
+    try {
+        Model<T> model;
+#if ISIN_HAVE_TINYOBJLOADER
+        if (format == MeshFormat::obj)
+            model = detail::parse_obj_model<T>(who, name, bytes, options, nullptr);
+        else
+#endif
+            model = detail::parse_ply_model<T>(who, name, bytes, options);
+        detail::finish_model(model, options);
+        return model;
+    } catch (const std::bad_alloc&) {
+        throw detail::mesh_error(who, name, "out of memory while reading the model");
     }
-    detail::finish_model(model, options);
-    return model;
 }
 
 /// Triangles of a Wavefront OBJ file (`v` and `f` statements; polygons triangulated, winding kept).
@@ -322,7 +371,11 @@ Model<T> load_model_from_memory(const void* data, std::size_t size, MeshFormat f
 template <class T>
 std::vector<Triangle<T>> load_obj(const std::string& path, const ReadLimits& limits) {
     const char* who = "isin::load_obj";
-    return detail::parse_obj<T>(who, path, detail::mesh_read_file(who, path, limits));
+    try {
+        return detail::parse_obj<T>(who, path, detail::mesh_read_file(who, path, limits));
+    } catch (const std::bad_alloc&) {
+        throw detail::mesh_error(who, path, "out of memory while reading the mesh");
+    }
 }
 
 /// Triangles of a PLY file: ascii or binary (either byte order) 1.0, positions from vertex x, y, z
@@ -333,12 +386,16 @@ std::vector<Triangle<T>> load_obj(const std::string& path, const ReadLimits& lim
 template <class T>
 std::vector<Triangle<T>> load_ply(const std::string& path, const ReadLimits& limits) {
     const char* who = "isin::load_ply";
-    Mesh<T> mesh;
-    {
-        const std::string bytes = detail::mesh_read_file(who, path, limits); // freed before the triangles are made
-        mesh = detail::parse_ply_mesh<T>(who, path, bytes);
+    try {
+        Mesh<T> mesh;
+        {
+            const std::string bytes = detail::mesh_read_file(who, path, limits); // freed before the triangles are made
+            mesh = detail::parse_ply_mesh<T>(who, path, bytes);
+        }
+        return detail::triangles_of(mesh);
+    } catch (const std::bad_alloc&) {
+        throw detail::mesh_error(who, path, "out of memory while reading the mesh");
     }
-    return detail::triangles_of(mesh);
 }
 
 /// Triangles of OBJ or PLY data in memory (`size` bytes at `data`), as load_obj / load_ply read
@@ -348,8 +405,13 @@ template <class T>
 std::vector<Triangle<T>> load_mesh_from_memory(const void* data, std::size_t size, MeshFormat format,
                                                const std::string& name) {
     const std::string_view bytes(data ? static_cast<const char*>(data) : "", data ? size : 0);
-    return format == MeshFormat::obj ? detail::parse_obj<T>("isin::load_obj", name, bytes)
-                                     : detail::triangles_of(detail::parse_ply_mesh<T>("isin::load_ply", name, bytes));
+    const char* who = format == MeshFormat::obj ? "isin::load_obj" : "isin::load_ply";
+    try {
+        return format == MeshFormat::obj ? detail::parse_obj<T>(who, name, bytes)
+                                         : detail::triangles_of(detail::parse_ply_mesh<T>(who, name, bytes));
+    } catch (const std::bad_alloc&) {
+        throw detail::mesh_error(who, name, "out of memory while reading the mesh");
+    }
 }
 
 /// Triangles of an OBJ or PLY file, chosen by the extension (.obj, .ply, any letter case).

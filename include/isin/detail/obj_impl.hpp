@@ -15,12 +15,14 @@
 #include <streambuf>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include "../mesh.hpp"
 #include "mesh_text.hpp"
 #include "file.hpp"
+#include "model_files.hpp"
 #include "polygon.hpp"
 #include "tinyobj.hpp"
 
@@ -182,11 +184,14 @@ struct ObjCollector {
     std::vector<Corner> corners;
     std::vector<Face> faces;
     std::vector<std::string> part_names{std::string()};
+    std::unordered_map<std::string, std::uint32_t> part_ids{{std::string(), 0}}; // index of each name
+    std::uint64_t max_parts = ~std::uint64_t(0);                                 // ModelBudget::meshes
+    std::uint64_t max_vertices = ~std::uint64_t(0);                              // ModelBudget::vertices
     std::uint32_t part = 0;
     std::int32_t material = -1;
-    std::vector<tobj::material_t> materials; // all .mtl files' materials so far
-    std::map<std::string, int> material_ids; // their names
-    std::vector<std::string> material_dirs;  // the directory of each material's .mtl (texture paths)
+    std::vector<tobj::material_t> materials;           // all .mtl files' materials so far
+    std::unordered_map<std::string, int> material_ids; // their names (the first of a name counts)
+    std::vector<std::string> material_dirs;            // the directory of each material's .mtl (texture paths)
     std::vector<std::string> warnings;
     char bad_kind = 0;
     std::size_t bad_ordinal = 0;
@@ -215,14 +220,17 @@ struct ObjCollector {
         material = found == material_ids.end() ? -1 : found->second;
         if (material < 0) warnings.push_back("material '" + name.substr(0, 80) + "' is not defined");
     }
-    void set_part(const std::string& name) {
-        for (std::size_t i = 0; i < part_names.size(); ++i) // few parts in real files; a map if that changes
-            if (part_names[i] == name) {
-                part = static_cast<std::uint32_t>(i);
-                return;
-            }
-        part_names.push_back(name);
-        part = static_cast<std::uint32_t>(part_names.size() - 1);
+    /// Makes `name` the current part; false if it would be one more than max_parts.
+    [[nodiscard]] bool set_part(const std::string& name) {
+        const auto [at, added] = part_ids.try_emplace(name, static_cast<std::uint32_t>(part_names.size()));
+        if (added &&
+            (part_names.size() > max_parts || part_names.size() >= std::numeric_limits<std::uint32_t>::max())) {
+            part_ids.erase(at);
+            return false;
+        }
+        if (added) part_names.push_back(name);
+        part = at->second;
+        return true;
     }
 
     /// Adds a face of n ≥ 3 references (as obj_parse_reference reads them).
@@ -277,31 +285,52 @@ struct ObjCollector {
     }
 };
 
-/// Reads .mtl files for tinyobjloader with isin's file checks (regular files within the limits)
-/// and number checks; a file that cannot be read is a warning, a malformed one an error.
+/// Reads .mtl files for tinyobjloader through ModelFiles (each file once, confined, within the
+/// limits and the model's budget) with isin's number checks; a file that cannot be read or is
+/// over the budget is a warning, a malformed one an error.
 template <class T>
-class ObjMaterialReader : public tobj::MaterialReader {
+class ObjMaterialReader {
 public:
-    ObjMaterialReader(std::string dir, const ReadLimits& limits, ObjCollector<T>& collector)
-        : dir_(std::move(dir)), limits_(limits), c_(collector) {}
+    ObjMaterialReader(std::string dir, ModelFiles& files, ObjCollector<T>& collector)
+        : dir_(std::move(dir)), files_(files), c_(collector) {}
 
     std::string error; // the first malformed .mtl, as a message naming it
 
-    bool operator()(const std::string& name, std::vector<tobj::material_t>* materials,
-                    std::map<std::string, int>* names, std::string*, std::string*) override {
-        const std::string path = dir_ + name;
+    /// Reads the .mtl file `name` (relative to the OBJ's directory) unless it was read before;
+    /// true if it is read, now or before.
+    bool read(const std::string& name) {
+        const ModelFiles::Found found = files_.find(dir_, name, ModelFileKind::material, false);
+        if (found.id == ModelFiles::none) {
+            c_.warnings.push_back("material file '" + (dir_ + name).substr(0, 200) + "': " + found.why);
+            return false;
+        }
+        int& read_before = files_.memo(found.id);
+        if (read_before >= 0) return read_before == 1;
+        read_before = 0;
+        const std::string& path = files_.path(found.id);
+        const std::uint64_t left = files_.budget.mtl_bytes - std::min(files_.budget.mtl_bytes, files_.mtl_bytes);
+        std::error_code ec;
+        const std::uintmax_t size = std::filesystem::file_size(path, ec);
+        if (!ec && size > left) {
+            c_.warnings.push_back("material file '" + path + "': " + std::to_string(size) + " bytes, more than the " +
+                                  std::to_string(left) + " left of ModelBudget::mtl_bytes; left out");
+            return false;
+        }
         std::string text;
-        const std::string why = read_whole_file(path, text, limits_);
+        const std::string why = files_.read(found.id, text, left);
         if (!why.empty()) {
             c_.warnings.push_back("material file '" + path + "': " + why);
             return false;
         }
+        files_.mtl_bytes += text.size();
         // tinyobjloader's number parser must not see what isin refuses in OBJ text (see
         // obj_unsafe_number); other malformed numbers it reads as 0, as assimp does.
         std::string unsafe;
+        std::uint64_t newmtl = 0; // materials the file defines, for the budget
         obj_for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
             const char *tb = nullptr, *te = nullptr;
-            while (obj_token(b, e, tb, te)) {
+            for (bool first = true; obj_token(b, e, tb, te); first = false) {
+                if (first && te - tb == 6 && std::memcmp(tb, "newmtl", 6) == 0) ++newmtl;
                 const std::string bad = obj_unsafe_number(tb, te);
                 if (!bad.empty()) {
                     unsafe = "line " + std::to_string(line) + ": " + bad;
@@ -314,20 +343,31 @@ public:
             if (error.empty()) error = "'" + path + "': " + unsafe;
             return false;
         }
+        const std::uint64_t max_materials = files_.budget.materials;
+        if (newmtl > max_materials - std::min<std::uint64_t>(max_materials, c_.materials.size())) {
+            c_.warnings.push_back(
+                "material file '" + path + "': " + std::to_string(newmtl) + " materials, more than the " +
+                std::to_string(max_materials - std::min<std::uint64_t>(max_materials, c_.materials.size())) +
+                " left of ModelBudget::materials; left out");
+            return false;
+        }
         ObjTextBuf buf(text);
         std::istream in(&buf);
         std::string warn, err;
-        const std::size_t before = materials->size();
-        tobj::LoadMtl(names, materials, &in, &warn, &err);
+        std::map<std::string, int> names; // tinyobjloader's map of this file's names (first of a name kept)
+        const std::size_t before = c_.materials.size();
+        tobj::LoadMtl(&names, &c_.materials, &in, &warn, &err);
+        for (std::size_t i = before; i < c_.materials.size(); ++i)
+            c_.material_ids.emplace(c_.materials[i].name, static_cast<int>(i));
         const std::size_t slash = path.find_last_of('/');
-        c_.material_dirs.resize(before, dir_);
-        c_.material_dirs.resize(materials->size(), slash == std::string::npos ? "" : path.substr(0, slash + 1));
+        c_.material_dirs.resize(c_.materials.size(), slash == std::string::npos ? "" : path.substr(0, slash + 1));
+        read_before = 1;
         return true;
     }
 
 private:
     std::string dir_;
-    const ReadLimits& limits_;
+    ModelFiles& files_;
     ObjCollector<T>& c_;
 };
 
@@ -345,11 +385,11 @@ private:
 
 /// Parses OBJ text into `c` in one pass, checking every number and reference on the way; throws
 /// MeshError naming the line for any problem. `dir` (ending in '/', or "") is where .mtl files
-/// are looked for, through `limits`; null `limits`: positions and faces only (load_obj). Without
-/// `read_materials` (data from memory), mtllib lines are left out with a warning.
+/// are looked for, through `files`; without `attributes`: positions and faces only (load_obj).
+/// Without `files` (data from memory), mtllib lines are left out with a warning.
 template <class T>
 inline void obj_collect(const char* who, const std::string& name, std::string_view text, ObjCollector<T>& c,
-                        const std::string& dir, const ReadLimits* limits, bool read_materials = true) {
+                        const std::string& dir, bool attributes, ModelFiles* files) {
     // A NUL byte: UTF-16 text or binary data, which no OBJ reader reads as what it holds.
     if (const void* nul = std::memchr(text.data(), 0, text.size())) {
         const auto at = static_cast<std::size_t>(static_cast<const char*>(nul) - text.data());
@@ -360,14 +400,16 @@ inline void obj_collect(const char* who, const std::string& name, std::string_vi
                                : "binary data (a NUL byte at offset " + std::to_string(at) + "), not OBJ text");
     }
     if (text.size() >= 3 && text.substr(0, 3) == "\xef\xbb\xbf") text.remove_prefix(3); // UTF-8 byte order mark
-    c.attributes = limits != nullptr;
+    c.attributes = attributes;
     std::unique_ptr<ObjMaterialReader<T>> mtl;
-    if (limits) mtl = std::make_unique<ObjMaterialReader<T>>(dir, *limits, c);
-    std::vector<std::string> mtl_files;   // read already
+    if (files) mtl = std::make_unique<ObjMaterialReader<T>>(dir, *files, c);
     std::vector<std::array<int, 3>> refs; // a face's references
     obj_for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
         const auto fail = [&](const std::string& why) {
             throw mesh_error(who, name, "line " + std::to_string(line) + ": " + why);
+        };
+        const auto too_many_parts = [&] {
+            return "more than " + std::to_string(c.max_parts) + " group and object names (ModelBudget::meshes)";
         };
         const char kind = obj_statement(b, e);
         const char *tb = nullptr, *te = nullptr;
@@ -388,6 +430,8 @@ inline void obj_collect(const char* who, const std::string& name, std::string_vi
                 ++count;
             }
             if (count < 3) fail("vertex has " + std::to_string(count) + " coordinates, needs 3");
+            if (c.vertices.size() >= c.max_vertices)
+                fail("more than " + std::to_string(c.max_vertices) + " vertices (ModelBudget::vertices)");
             c.vertices.push_back({static_cast<T>(xyz[0]), static_cast<T>(xyz[1]), static_cast<T>(xyz[2])});
         } else if (kind == 'n' || kind == 't') { // up to three numbers; missing or malformed ones read as 0
             double xyz[3] = {0, 0, 0};
@@ -416,32 +460,28 @@ inline void obj_collect(const char* who, const std::string& name, std::string_vi
             if (const char* rest = obj_keyword(b, e, "g")) { // group: the names on the line
                 std::string names;
                 while (obj_token(rest, e, tb, te)) names += (names.empty() ? "" : " ") + std::string(tb, te);
-                c.set_part(names);
+                if (!c.set_part(names)) fail(too_many_parts());
             } else if ((rest = obj_keyword(b, e, "o"))) {
-                c.set_part(std::string(rest, e));
+                if (!c.set_part(std::string(rest, e))) fail(too_many_parts());
             } else if ((rest = obj_keyword(b, e, "usemtl"))) {
                 c.use_material(std::string(rest, e));
-            } else if ((rest = obj_keyword(b, e, "mtllib")) && !read_materials) {
+            } else if ((rest = obj_keyword(b, e, "mtllib")) && !files) {
                 c.warnings.push_back("line " + std::to_string(line) +
                                      ": mtllib: no material files are read for data in memory");
             } else if (rest) {
                 // File names separated by spaces ('\ ' is a space in a name); the first that reads is used.
-                std::vector<std::string> files(1);
+                std::vector<std::string> names(1);
                 for (const char* p = rest; p != e; ++p) {
                     if (*p == '\\' && p + 1 != e && p[1] == ' ')
-                        files.back() += *++p;
+                        names.back() += *++p;
                     else if (*p == ' ')
-                        files.emplace_back();
+                        names.emplace_back();
                     else
-                        files.back() += *p;
+                        names.back() += *p;
                 }
-                for (const std::string& file : files) {
+                for (const std::string& file : names) {
                     if (file.empty()) continue;
-                    if (std::find(mtl_files.begin(), mtl_files.end(), file) != mtl_files.end()) break;
-                    if ((*mtl)(file, &c.materials, &c.material_ids, nullptr, nullptr)) {
-                        mtl_files.push_back(file);
-                        break;
-                    }
+                    if (mtl->read(file)) break;
                     if (!mtl->error.empty()) throw mesh_error(who, name, "material file " + mtl->error);
                 }
             }
@@ -472,7 +512,7 @@ template <class T>
     static_assert(std::is_floating_point_v<T>, "isin::load_obj needs a floating-point type");
 #if ISIN_HAVE_TINYOBJLOADER
     ObjCollector<T> c;
-    obj_collect<T>(who, name, text, c, "", nullptr);
+    obj_collect<T>(who, name, text, c, "", false, nullptr);
     std::vector<std::array<std::uint32_t, 3>> indices;
     indices.reserve(c.corners.size() > 2 * c.faces.size() ? c.corners.size() - 2 * c.faces.size() : 0);
     std::vector<FanRun> runs;
