@@ -10,6 +10,7 @@
 //   trefoil()            knot tube, 1000 × 150 quads → 300,000 triangles, around z = 45
 //   terrain()            value-noise height field, 500 × 500 quads → 500,000 triangles
 //   random_soup(n)       n small triangles scattered through the view, z ∈ [25, 65]
+//   from_file(path)      a PLY or OBJ file (isin::load_mesh), framed to fill the view around z = 45
 #include <isin/isin.hpp>
 
 #include "../tests/common/secondary.hpp"
@@ -131,6 +132,41 @@ std::vector<isin::Triangle<T>> random_soup(std::size_t count, std::uint64_t seed
     return out;
 }
 
+/// A mesh file's triangles (isin::load_mesh: PLY or OBJ), scaled and moved as a whole so that its box
+/// is centred at (0, 0, 45) and fills 85% of the view's width or height there, as the generated
+/// meshes do. In double, rounded to T once per vertex: shared vertices stay bit-identical.
+template <class T>
+std::vector<isin::Triangle<T>> from_file(const std::string& path) {
+    const std::vector<isin::Triangle<double>> in = isin::load_mesh<double>(path);
+    isin::Box<double> box;
+    for (const auto& t : in) box.grow(t.v0), box.grow(t.v1), box.grow(t.v2);
+    if (in.empty() || !(box.lo.x <= box.hi.x)) throw std::invalid_argument("no triangles in '" + path + "'");
+    const V3 centre = box.lo * 0.5 + box.hi * 0.5, extent = box.hi - box.lo;
+    const double z = 45, fill = 0.85; // the view spans x ∈ ±0.8z, y ∈ ±0.45z at depth z
+    const double scale =
+        std::min(fill * 1.6 * z / std::max(extent.x, 1e-300), fill * 0.9 * z / std::max(extent.y, 1e-300));
+    const auto place = [&](const V3& p) { return to<T>((p - centre) * scale + V3{0, 0, z}); };
+    std::vector<isin::Triangle<T>> out;
+    out.reserve(in.size());
+    for (const auto& t : in) out.push_back({place(t.v0), place(t.v1), place(t.v2)});
+    return out;
+}
+
+/// Whether a vs_embree mesh name is a file (it names a .ply or .obj) rather than a generated mesh.
+inline bool is_file(const std::string& name) {
+    const auto ends = [&](const char* e) {
+        const std::string x(e);
+        return name.size() > x.size() && name.compare(name.size() - x.size(), x.size(), x) == 0;
+    };
+    return ends(".ply") || ends(".obj") || ends(".PLY") || ends(".OBJ");
+}
+
+/// The name a table gives a mesh: a file's name without its folders.
+inline std::string label(const std::string& name) {
+    return is_file(name) ? name.substr(name.find_last_of('/') == std::string::npos ? 0 : name.find_last_of('/') + 1)
+                         : name;
+}
+
 /// The meshes of the vs_embree benchmark, by name.
 inline const std::vector<std::string>& names() {
     static const std::vector<std::string> list = {"icosphere-80k", "icosphere-1.3M", "trefoil-300k", "terrain-500k",
@@ -145,6 +181,7 @@ std::vector<isin::Triangle<T>> make(const std::string& name) {
     if (name == "trefoil-300k") return trefoil<T>();
     if (name == "terrain-500k") return terrain<T>();
     if (name == "soup-200k") return random_soup<T>(200000);
+    if (is_file(name)) return from_file<T>(name);
     throw std::invalid_argument("unknown mesh '" + name + "'");
 }
 

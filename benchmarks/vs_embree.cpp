@@ -29,6 +29,20 @@
 // build's memory, freed or kept by the allocator, would change the other's page faults);
 // `--library both` interleaves the two in one process.
 //
+// Cold and warm builds: the isin child times each build twice, interleaved: cold (no
+// BuildContext: all scratch comes fresh from the kernel and goes back to it) and warm (one
+// BuildContext held across the repeats: each build takes the blocks the one before gave back).
+//
+// Memory: for each mesh a child process per library (--memory-only) holds the triangles, builds
+// once (isin: a Bvh<float>, no context; Embree: its scene), calls malloc_trim(0), and reports
+// the growth of its resident set over the build (/proc/self/statm) and the peak during the build
+// (VmHWM, reset through /proc/self/clear_refs just before); a third child builds isin with a
+// BuildContext and keeps it, to show what the context holds.
+//
+// Meshes: the generated ones of meshes.hpp, and any PLY or OBJ file (--mesh FILE; isin's own
+// loader), framed to fill the view as they do; the default list ends with the Stanford dragon
+// when build/load_models/dragon_le.ply exists (scripts/dragon.sh fetches it).
+//
 // Checks: primary hit count and Σt of isin, Embree-1 and Embree-16 must agree to 1e-5 relative,
 // and so must the number of occluded shadow rays; the program exits with status 1 otherwise.
 // For reference it also prints the counts of Embree's robust mode (RTC_SCENE_FLAG_ROBUST, its
@@ -44,6 +58,7 @@
 #include <pmmintrin.h>
 #include <pthread.h>
 #include <sched.h>
+#include <malloc.h>
 #include <sys/resource.h>
 #include <unistd.h>
 #include <xmmintrin.h>
@@ -64,6 +79,7 @@
 
 #include <isin/bvh.hpp>
 #include <isin/camera.hpp>
+#include <isin/mesh.hpp>
 #include <isin/offset.hpp>
 
 #include "meshes.hpp"
@@ -85,11 +101,15 @@ struct Options {
     std::string stream_csv;                              // the stream table's rows (PacketBench), appended
     std::vector<std::string> studies = studies::names(); // after the meshes (embree_studies.hpp)
     bool build_only = false;                             // child mode: time the builds of one mesh with `build_threads`
+    bool memory_only = false;                            // child mode: the memory of one build of one mesh
     int build_threads = 1;
     std::string build_library = "both"; // child mode: isin, embree or both
     std::string self;                   // this program, re-executed for the build times
     bool pin = true;                    // run_bands pins its threads (see the top of this file)
 };
+
+// The Stanford dragon (scripts/dragon.sh), in the default list when it is there.
+constexpr const char* dragon = "build/load_models/dragon_le.ply";
 
 // Whether run_bands pins its threads: Options::pin, set once before anything is traced.
 bool pin_threads = true;
@@ -602,7 +622,10 @@ int build_only(const Options& opt) {
     RTCDevice device = new_device(opt.build_threads);
     isin::BvhOptions bo;
     bo.threads = opt.build_threads;
-    std::vector<double> isin_ms, embree_ms, isin_cpu, embree_cpu;
+    std::vector<double> isin_ms, embree_ms, isin_cpu, embree_cpu, warm_ms;
+    isin::BuildContext context; // held across the warm builds
+    isin::BvhOptions warm = bo;
+    warm.context = &context;
     std::size_t check = 0;
     isin::BvhCost sah;
     const bool isin = opt.build_library != "embree", embree = opt.build_library != "isin";
@@ -615,6 +638,10 @@ int build_only(const Options& opt) {
             check += bvh.node_count();
             if (rep < 0) sah = bvh.tree().sah_cost(); // the tree's quality, untimed
             if (rep >= 0) isin_ms.push_back(1e3 * s), isin_cpu.push_back(c / s);
+            t0 = Clock::now();
+            const isin::Bvh<float> again{tris, warm};
+            if (rep >= 0) warm_ms.push_back(1e3 * since(t0));
+            check += again.node_count();
         }
         if (!embree) continue;
         c0 = cpu_seconds();
@@ -626,13 +653,115 @@ int build_only(const Options& opt) {
     }
     rtcReleaseDevice(device);
     const auto or_none = [](const std::vector<double>& v) { return v.empty() ? not_measured : median(v); };
-    std::printf("BUILD %.3f %.3f %.3f %.3f %zu %.6f %.6f %.6f\n", or_none(isin_ms), or_none(isin_cpu),
-                or_none(embree_ms), or_none(embree_cpu), check, sah.node_visits, sah.leaf_visits, sah.primitive_tests);
+    std::printf("BUILD %.3f %.3f %.3f %.3f %zu %.6f %.6f %.6f %.3f\n", or_none(isin_ms), or_none(isin_cpu),
+                or_none(embree_ms), or_none(embree_cpu), check, sah.node_visits, sah.leaf_visits, sah.primitive_tests,
+                or_none(warm_ms));
     return 0;
+}
+
+// ---- memory (child process) ------------------------------------------------------------------------
+
+// The resident set of this process, in bytes (/proc/self/statm), or NaN.
+double resident_bytes() {
+    std::FILE* f = std::fopen("/proc/self/statm", "r");
+    if (!f) return not_measured;
+    unsigned long long size = 0, resident = 0;
+    const bool ok = std::fscanf(f, "%llu %llu", &size, &resident) == 2;
+    std::fclose(f);
+    return ok ? double(resident) * double(sysconf(_SC_PAGESIZE)) : not_measured;
+}
+
+// The peak resident set (VmHWM) in bytes, or NaN.
+double peak_resident_bytes() {
+    std::FILE* f = std::fopen("/proc/self/status", "r");
+    if (!f) return not_measured;
+    char line[256];
+    double peak = not_measured;
+    while (std::fgets(line, sizeof line, f)) {
+        unsigned long long kb = 0;
+        if (std::sscanf(line, "VmHWM: %llu kB", &kb) == 1) peak = 1024.0 * double(kb);
+    }
+    std::fclose(f);
+    return peak;
+}
+
+// Resets VmHWM to the current resident set; false where the kernel does not allow it.
+bool reset_peak() {
+    std::FILE* f = std::fopen("/proc/self/clear_refs", "w");
+    if (!f) return false;
+    const bool ok = std::fputs("5", f) >= 0;
+    return std::fclose(f) == 0 && ok;
+}
+
+// Child mode: one build of one mesh by one library (isin, isin-context or embree), the threads
+// and the library's first build (its pools, isin's and Embree's thread start-up) before the
+// measure; prints the resident set's growth after the build and malloc_trim(0), and its peak.
+int memory_only(const Options& opt) {
+    set_fp_mode();
+    const std::vector<Tri> tris = meshes::make<float>(opt.meshes.front());
+    const std::vector<Tri> small(tris.begin(), tris.begin() + std::ptrdiff_t(std::min<std::size_t>(tris.size(), 1000)));
+    const bool embree = opt.build_library == "embree";
+    isin::BvhOptions bo;
+    bo.threads = opt.build_threads;
+    isin::BuildContext context;
+    if (opt.build_library == "isin-context") bo.context = &context;
+    RTCDevice device = embree ? new_device(opt.build_threads) : nullptr;
+    if (embree)
+        rtcReleaseScene(embree_scene::make(device, small));
+    else
+        (void)isin::Bvh<float>(small, bo).node_count();
+    malloc_trim(0);
+    const double before = resident_bytes();
+    const bool peak_known = reset_peak();
+    std::size_t check = 0;
+    RTCScene scene = nullptr;
+    std::unique_ptr<isin::Bvh<float>> bvh;
+    if (embree)
+        scene = embree_scene::make(device, tris);
+    else
+        bvh = std::make_unique<isin::Bvh<float>>(tris, bo), check = bvh->node_count();
+    const double peak = peak_known ? peak_resident_bytes() - before : not_measured;
+    malloc_trim(0);
+    const double growth = resident_bytes() - before;
+    std::printf("MEMORY %.0f %.0f %zu\n", growth, peak, check);
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+    return 0;
+}
+
+struct Memory {
+    double isin = not_measured, isin_peak = not_measured, held = not_measured, embree = not_measured,
+           embree_peak = not_measured;
+};
+
+// The memory of one build of `mesh` on `threads` threads, each library in a child process of its own.
+Memory child_memory(const Options& opt, const std::string& mesh, int threads) {
+    Memory m;
+    for (const std::string library : {"isin", "isin-context", "embree"}) {
+        const std::string command = "'" + opt.self + "' --memory-only --mesh '" + mesh + "' --threads " +
+                                    std::to_string(threads) + " --library " + library;
+        FILE* pipe = popen(command.c_str(), "r");
+        if (!pipe) return m;
+        char line[512];
+        double growth = not_measured, peak = not_measured;
+        while (std::fgets(line, sizeof line, pipe)) {
+            unsigned long long check = 0;
+            if (std::sscanf(line, "MEMORY %lf %lf %llu", &growth, &peak, &check) != 3) std::fputs(line, stderr);
+        }
+        if (pclose(pipe) != 0) std::fprintf(stderr, "memory child failed: %s\n", command.c_str());
+        if (library == "isin")
+            m.isin = growth, m.isin_peak = peak;
+        else if (library == "isin-context")
+            m.held = growth;
+        else
+            m.embree = growth, m.embree_peak = peak;
+    }
+    return m;
 }
 
 struct BuildTimes {
     double isin_ms = not_measured, isin_cpu = not_measured, embree_ms = not_measured, embree_cpu = not_measured;
+    double isin_warm_ms = not_measured; // with a BuildContext held across the builds
     isin::BvhCost sah; // isin's tree: expected nodes, leaves and triangles a ray through the root meets
 };
 
@@ -649,14 +778,15 @@ BuildTimes child_build(const Options& opt, const std::string& mesh, int threads)
         BuildTimes child;
         while (std::fgets(line, sizeof line, pipe)) {
             unsigned long long check = 0;
-            if (std::sscanf(line, "BUILD %lf %lf %lf %lf %llu %lf %lf %lf", &child.isin_ms, &child.isin_cpu,
+            if (std::sscanf(line, "BUILD %lf %lf %lf %lf %llu %lf %lf %lf %lf", &child.isin_ms, &child.isin_cpu,
                             &child.embree_ms, &child.embree_cpu, &check, &child.sah.node_visits, &child.sah.leaf_visits,
-                            &child.sah.primitive_tests) != 8)
+                            &child.sah.primitive_tests, &child.isin_warm_ms) != 9)
                 std::fputs(line, stderr);
         }
         if (pclose(pipe) != 0) std::fprintf(stderr, "build child failed: %s\n", command.c_str());
         if (library == "isin")
-            b.isin_ms = child.isin_ms, b.isin_cpu = child.isin_cpu, b.sah = child.sah;
+            b.isin_ms = child.isin_ms, b.isin_cpu = child.isin_cpu, b.sah = child.sah,
+            b.isin_warm_ms = child.isin_warm_ms;
         else
             b.embree_ms = child.embree_ms, b.embree_cpu = child.embree_cpu;
     }
@@ -681,7 +811,8 @@ std::vector<int> parse_list(const char* s) {
 void usage(FILE* f) {
     std::fprintf(
         f,
-        "usage: vs_embree [--mesh NAME|none] [--repeats N] [--threads-list 1,2] [--width W] [--height H] [--csv FILE]\n"
+        "usage: vs_embree [--mesh NAME|FILE|none] [--repeats N] [--threads-list 1,2] [--width W] [--height H] [--csv "
+        "FILE]\n"
         "                 [--stream-csv FILE] [--studies all|none|spheres,instances,transparency,refit,groups,memory]\n"
         "                 [--no-pin]\n"
         "isin's Bvh<float> against Embree %d.%d.%d (RTC_BUILD_QUALITY_MEDIUM) on the same triangles and rays:\n"
@@ -691,14 +822,19 @@ void usage(FILE* f) {
         RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH);
     for (const auto& m : meshes::names()) std::fprintf(f, " %s", m.c_str());
     std::fprintf(f,
-                 "\n--csv appends one row per mesh and thread count of the first table, --stream-csv one of the\n"
+                 ", and %s when it exists (scripts/dragon.sh);\n"
+                 "or any .ply/.obj FILE, framed to fill the view. Builds: isin cold (no BuildContext) and warm (one\n"
+                 "held across the repeats); memory: resident-set growth after one build and malloc_trim(0), and its\n"
+                 "peak during the build, each library in a child process.\n"
+                 "--csv appends one row per mesh and thread count of the first table, --stream-csv one of the\n"
                  "stream table (Mrays/s and the three ratios; scripts/streams.sh takes medians over runs). Then the "
                  "scene studies of\n"
                  "benchmarks/embree_studies.hpp (at half the width and height): spheres against Embree's points and\n"
                  "user geometry, instances, transparent shadows, refit, a mesh in 20 groups, memory. Exit status 1\n"
                  "when the libraries' hit counts or sums of t differ by more than 1e-5 (relative).\n"
                  "Each measure's k-th thread runs pinned to the k-th CPU the process may use; --no-pin leaves\n"
-                 "the threads to the scheduler.\n");
+                 "the threads to the scheduler.\n",
+                 dragon);
 }
 
 // `path` opened for appending, `header` written first when the file is empty; nullptr for no
@@ -718,7 +854,7 @@ int run(const Options& opt) {
     // --csv and --stream-csv: appended, with the header line when the file is new.
     std::FILE* csv = open_csv(opt.csv, "mesh,triangles,threads,build_isin_ms,build_embree_ms,isin_mrays,embree1_mrays,"
                                        "embree16_mrays,isin_over_embree1,shadow_isin_mrays,shadow_embree1_mrays,"
-                                       "shadow_isin_over_embree1,width,height\n");
+                                       "shadow_isin_over_embree1,width,height,build_isin_warm_ms\n");
     if (!opt.csv.empty() && !csv) return 2;
     std::FILE* stream_csv = open_csv(
         opt.stream_csv, "mesh,threads,primary_stream,primary_isin1,primary_e8,primary_e16,shadow_stream,"
@@ -747,6 +883,8 @@ int run(const Options& opt) {
         const double gen_s = since(t0);
         std::vector<BuildTimes> builds;
         for (int threads : opt.threads) builds.push_back(child_build(opt, name, threads));
+        const Memory memory = child_memory(opt, name, opt.threads.front());
+        const std::string shown = meshes::label(name);
         t0 = Clock::now();
         const isin::Bvh<float> bvh{tris};
         RTCScene scene = embree_scene::make(device, tris);
@@ -775,13 +913,14 @@ int run(const Options& opt) {
             for (int m = 0; m < 5; ++m) mrays[m] = (m < 3 ? primary : shadows) / median(s[m]) * 1e-6;
             const BuildTimes& b = builds[ti];
             std::printf("%-15s %9zu %3d | %8.1f %8.1f | %6.2f %6.2f %6.2f %6.2f | %7zu %6.2f %6.2f %6.2f\n",
-                        name.c_str(), tris.size(), threads, b.isin_ms, b.embree_ms, mrays[0], mrays[1], mrays[2],
+                        shown.c_str(), tris.size(), threads, b.isin_ms, b.embree_ms, mrays[0], mrays[1], mrays[2],
                         mrays[0] / mrays[1], bench.shadow.size(), mrays[3], mrays[4], mrays[3] / mrays[4]);
             std::fflush(stdout);
             if (csv)
-                std::fprintf(csv, "%s,%zu,%d,%.3f,%.3f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%d\n", name.c_str(),
+                std::fprintf(csv, "%s,%zu,%d,%.3f,%.3f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%d,%.3f\n", shown.c_str(),
                              tris.size(), threads, b.isin_ms, b.embree_ms, mrays[0], mrays[1], mrays[2],
-                             mrays[0] / mrays[1], mrays[3], mrays[4], mrays[3] / mrays[4], opt.width, opt.height);
+                             mrays[0] / mrays[1], mrays[3], mrays[4], mrays[3] / mrays[4], opt.width, opt.height,
+                             b.isin_warm_ms);
             if (ti == 0) {
                 for (int m = 0; m < 3; ++m) ref[m] = tot[m];
                 for (int m = 0; m < 2; ++m) shadow_ref[m] = tot[3 + m];
@@ -808,7 +947,7 @@ int run(const Options& opt) {
         std::printf(
             "  %s %s: hits isin %llu E-1 %llu E-16 %llu E-robust %llu (%.1f%% of rays); sum t isin %.9g E-1 %.9g"
             " E-16 %.9g E-robust %.9g; occluded isin %llu E-1 %llu E-robust %llu\n",
-            ok ? "OK" : "MISMATCH", name.c_str(), static_cast<unsigned long long>(ref[0].hits),
+            ok ? "OK" : "MISMATCH", shown.c_str(), static_cast<unsigned long long>(ref[0].hits),
             static_cast<unsigned long long>(ref[1].hits), static_cast<unsigned long long>(ref[2].hits),
             static_cast<unsigned long long>(robust_primary.hits),
             100.0 * double(ref[0].hits) / (double(opt.width) * double(opt.height)), ref[0].sum_t, ref[1].sum_t,
@@ -816,18 +955,24 @@ int run(const Options& opt) {
             static_cast<unsigned long long>(shadow_ref[1].hits), static_cast<unsigned long long>(robust_shadow.hits));
         std::printf("  builds (child process each):");
         for (std::size_t ti = 0; ti < opt.threads.size(); ++ti)
-            std::printf(" %d thr: isin %.1f ms (cpu/wall %.2f; SAH: %.3f nodes, %.3f leaves, %.3f triangles a ray), "
-                        "Embree %.1f ms (cpu/wall %.2f);",
-                        opt.threads[ti], builds[ti].isin_ms, builds[ti].isin_cpu, builds[ti].sah.node_visits,
-                        builds[ti].sah.leaf_visits, builds[ti].sah.primitive_tests, builds[ti].embree_ms,
-                        builds[ti].embree_cpu);
+            std::printf(" %d thr: isin %.1f ms cold, %.1f ms warm (cpu/wall %.2f; SAH: %.3f nodes, %.3f leaves, %.3f "
+                        "triangles a ray), Embree %.1f ms (cpu/wall %.2f);",
+                        opt.threads[ti], builds[ti].isin_ms, builds[ti].isin_warm_ms, builds[ti].isin_cpu,
+                        builds[ti].sah.node_visits, builds[ti].sah.leaf_visits, builds[ti].sah.primitive_tests,
+                        builds[ti].embree_ms, builds[ti].embree_cpu);
         const isin::BvhCost embree_sah = embree_scene::builder_sah(device, tris);
         std::printf(" Embree's builder (rtcBuildBVH, 8 wide, leaves of 1-8, blocks of 8) SAH: %.3f nodes, %.3f leaves, "
                     "%.3f triangles a ray;",
                     embree_sah.node_visits, embree_sah.leaf_visits, embree_sah.primitive_tests);
         std::printf(" mesh %.2f s, setup %.2f s\n", gen_s, setup_s);
+        std::printf("  memory (%d thr, child process each, after the build and malloc_trim(0)): isin +%.1f MB (peak "
+                    "+%.1f MB during the build), Embree +%.1f MB (peak +%.1f MB); isin / Embree %.2f (peak %.2f); "
+                    "isin with its BuildContext still held +%.1f MB\n",
+                    opt.threads.front(), memory.isin / 1e6, memory.isin_peak / 1e6, memory.embree / 1e6,
+                    memory.embree_peak / 1e6, memory.isin / memory.embree, memory.isin_peak / memory.embree_peak,
+                    memory.held / 1e6);
         std::fflush(stdout);
-        all_ok = PacketBench(opt, bvh, scene, tris).run(name, opt, packet_table, stream_csv) && all_ok;
+        all_ok = PacketBench(opt, bvh, scene, tris).run(shown, opt, packet_table, stream_csv) && all_ok;
         rtcReleaseScene(scene);
     }
     std::fputs(packet_table.c_str(), stdout);
@@ -845,6 +990,7 @@ int run(const Options& opt) {
 
 int main(int argc, char** argv) {
     Options opt;
+    bool mesh_given = false;
     try {
         for (int i = 1; i < argc; ++i) {
             const std::string a = argv[i];
@@ -859,10 +1005,12 @@ int main(int argc, char** argv) {
                 const std::string m = value();
                 if (m == "none")
                     opt.meshes.clear();
-                else if (std::find(meshes::names().begin(), meshes::names().end(), m) == meshes::names().end())
-                    throw std::invalid_argument("unknown mesh '" + m + "'");
+                else if (!meshes::is_file(m) &&
+                         std::find(meshes::names().begin(), meshes::names().end(), m) == meshes::names().end())
+                    throw std::invalid_argument("unknown mesh '" + m + "' (nor a .ply or .obj file)");
                 else
                     opt.meshes = {m};
+                mesh_given = true;
             } else if (a == "--studies") {
                 const std::string list = value();
                 opt.studies.clear();
@@ -889,6 +1037,8 @@ int main(int argc, char** argv) {
                 opt.stream_csv = value();
             else if (a == "--build-only")
                 opt.build_only = true;
+            else if (a == "--memory-only")
+                opt.memory_only = true;
             else if (a == "--threads")
                 opt.build_threads = std::max(1, std::atoi(value()));
             else if (a == "--library")
@@ -908,9 +1058,21 @@ int main(int argc, char** argv) {
         return 2;
     }
     pin_threads = opt.pin;
-    if (opt.build_only) return build_only(opt);
+    if (!mesh_given && access(dragon, R_OK) == 0) opt.meshes.push_back(dragon);
+    try {
+        if (opt.build_only) return build_only(opt);
+        if (opt.memory_only) return memory_only(opt);
+    } catch (const std::exception& e) { // a file that cannot be read
+        std::fprintf(stderr, "vs_embree: %s\n", e.what());
+        return 2;
+    }
     char path[4096];
     const ssize_t len = readlink("/proc/self/exe", path, sizeof path - 1);
     opt.self = len > 0 ? std::string(path, std::size_t(len)) : std::string(argv[0]);
-    return run(opt);
+    try {
+        return run(opt);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "vs_embree: %s\n", e.what());
+        return 2;
+    }
 }

@@ -128,42 +128,6 @@ TEST_CASE("The build's blocks: from 2 MiB mapped on their own, 2 MiB-aligned; sm
     CHECK_THROWS_AS((void)alloc.allocate(std::size_t(-1) / 2), std::bad_alloc);
 }
 
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-TEST_CASE("The build's freed blocks are kept for the next block of their size, up to a limit") {
-    const std::size_t mib = std::size_t(1) << 20;
-    alignas(64) static unsigned char tokens[80]; // stand-ins for blocks: only their addresses count
-    isin::detail::KeptBlocks kept;
-    CHECK(kept.take(2 * mib) == nullptr);
-    REQUIRE(kept.keep(tokens + 0, 2 * mib));
-    REQUIRE(kept.keep(tokens + 1, 4 * mib));
-    REQUIRE(kept.keep(tokens + 2, 2 * mib));
-    CHECK(kept.take(6 * mib) == nullptr);    // exact sizes only: never a larger block
-    CHECK(kept.take(2 * mib) == tokens + 2); // the last kept first (its pages the most recent)
-    CHECK(kept.take(2 * mib) == tokens + 0);
-    CHECK(kept.take(2 * mib) == nullptr);
-    CHECK(kept.take(4 * mib) == tokens + 1);
-    // The limit: blocks up to it are kept, the next is left to its owner to unmap.
-    std::size_t total = 0;
-    int n = 0;
-    while (total + 2 * mib <= isin::detail::KeptBlocks::limit && n < 64) {
-        REQUIRE(kept.keep(tokens + n++, 2 * mib));
-        total += 2 * mib;
-    }
-    CHECK_FALSE(kept.keep(tokens + 70, 2 * mib));
-    CHECK_FALSE(kept.keep(tokens + 71, isin::detail::KeptBlocks::limit + 2 * mib));
-    for (int k = 0; k < n; ++k) CHECK(kept.take(2 * mib) != nullptr);
-    CHECK(kept.take(2 * mib) == nullptr);
-    // Through the allocator: a block freed and one of its size asked for again, written whole.
-    isin::detail::UninitAllocator<unsigned char> alloc;
-    for (int round = 0; round < 3; ++round) {
-        unsigned char* const p = alloc.allocate(6 * mib - 5);
-        p[0] = 1, p[6 * mib - 6] = 2;
-        CHECK(p[0] + p[6 * mib - 6] == 3);
-        alloc.deallocate(p, 6 * mib - 5);
-    }
-}
-#endif
-
 TEST_CASE_TEMPLATE("BVH: nearest hit and any-hit agree with the brute-force watertight loop", T, float, double) {
     for (int n : {1, 7, 8, 9, 100, 3000}) {
         CAPTURE(n);

@@ -2,6 +2,7 @@
 /// isin — bounding volume hierarchies, behind one header:
 ///  - bvh/box.hpp       Box<T>, the bounds a Bvh is built from
 ///  - bvh/tree.hpp      BvhTree<T>: 8-wide nodes and leaves (ranges of primitive indices), refit
+///  - bvh/build_context.hpp  BuildContext: scratch memory a caller keeps across rebuilds
 ///  - bvh/build.hpp     build_bvh: binned SAH on several threads, collapsed to 8-wide nodes for the
 ///                      least SAH cost (Ylitie, Karras & Laine 2017); any input builds
 ///  - bvh/traverse.hpp  traverse<Visit>: the caller's leaf test for the nearest, any or all hits
@@ -28,6 +29,7 @@
 ///     });
 #include "bvh/box.hpp"
 #include "bvh/build.hpp"
+#include "bvh/build_context.hpp"
 #include "bvh/closest_point.hpp"
 #include "bvh/crossings.hpp"
 #include "bvh/packet.hpp"

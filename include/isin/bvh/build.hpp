@@ -68,10 +68,14 @@ public:
     NodePool& operator=(const NodePool&) = delete;
     ~NodePool() {
         static_assert(std::is_trivially_destructible_v<BinaryNode<T>>, "nodes are freed with their blocks");
-        for (const Block& b : blocks_) UninitAllocator<BinaryNode<T>>().deallocate(b.nodes, b.size);
+        for (const Block& b : blocks_) UninitAllocator<BinaryNode<T>>(kept_).deallocate(b.nodes, b.size);
     }
-    // Sets the first block's size (nodes): about this thread's share.
-    void expect(std::size_t nodes) noexcept { next_size_ = std::clamp<std::size_t>(nodes, 64, largest); }
+    // Sets the first block's size (nodes): about this thread's share; and where blocks come from
+    // and go back to (a BuildContext's, or none).
+    void expect(std::size_t nodes, KeptBlocks* kept) noexcept {
+        next_size_ = std::clamp<std::size_t>(nodes, 64, largest);
+        kept_ = kept;
+    }
     // A new node, value-initialised (no children, not planned).
     BinaryNode<T>* make() {
         if (used_ == available_) grow();
@@ -88,13 +92,15 @@ private:
     void grow() {
         if (blocks_.size() == blocks_.capacity()) // so that push_back cannot throw after the allocation
             blocks_.reserve(2 * blocks_.size() + 4);
-        BinaryNode<T>* const nodes = UninitAllocator<BinaryNode<T>>().allocate(next_size_); // huge pages from 2 MiB
+        BinaryNode<T>* const nodes =
+            UninitAllocator<BinaryNode<T>>(kept_).allocate(next_size_); // huge pages from 2 MiB
         blocks_.push_back({nodes, next_size_});
         used_ = 0, available_ = next_size_;
         next_size_ = std::min(largest, 2 * next_size_);
     }
     std::vector<Block> blocks_;
     std::size_t used_ = 0, available_ = 0, next_size_ = 64;
+    KeptBlocks* kept_ = nullptr;
 };
 
 // Builds one BvhTree; its state (the primitives' boxes and centroids, the binary tree) ends with it.
@@ -119,7 +125,8 @@ public:
         // The primitives (box, centroid), in chunks; unusable boxes (empty, not finite) are
         // marked and then left out.
         // The bounds of the boxes and of their centroids come from the same pass, chunk by chunk.
-        Prims prims(n);
+        KeptBlocks* const kept = options.context ? &options.context->kept_blocks() : nullptr;
+        Prims prims(n, UninitAllocator<Prim>(kept));
         std::atomic<bool> unusable{false};
         Box4<T> box, centroids;
         std::mutex merging;
@@ -156,7 +163,7 @@ public:
         tree_.bound_ = std::max(max_abs(root_box.lo), max_abs(root_box.hi));
         threads_ = std::min(threads, 0xffff); // BinaryNode::builder: a pool for each
         pools_ = std::vector<NodePool<T>>(std::size_t(threads_));
-        for (auto& pool : pools_) pool.expect(prims.size() / std::size_t(threads_));
+        for (auto& pool : pools_) pool.expect(prims.size() / std::size_t(threads_), kept);
         BinaryNode<T>* const root = pools_[0].make();
         root->box = root_box, root->count = static_cast<std::uint32_t>(prims.size());
         build_binary(prims, {root, centroids.box(), 0});

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "box.hpp"
+#include "build_context.hpp"
 
 namespace isin {
 
@@ -24,8 +25,9 @@ class BvhFile;
 
 /// Build options of a Bvh.
 struct BvhOptions {
-    int threads = 0;   ///< build threads; 0 = std::thread::hardware_concurrency()
-    int leaf_size = 8; ///< SAH leaves hold at most this many primitives (1…8)
+    int threads = 0;                 ///< build threads; 0 = std::thread::hardware_concurrency()
+    int leaf_size = 8;               ///< SAH leaves hold at most this many primitives (1…8)
+    BuildContext* context = nullptr; ///< scratch kept across builds (BuildContext); null: none kept
 };
 
 /// What a tree costs a ray by the surface area heuristic (Goldsmith & Salmon 1987; MacDonald &

@@ -8,10 +8,11 @@
 /// in /sys/kernel/mm/transparent_hugepage/enabled, the default of Debian and Ubuntu) nothing
 /// else asks for them. Two ways: advise_huge_pages for a block that is already allocated (the
 /// tree's vectors), and map_huge_pages / unmap_huge_pages for the build's own blocks of 2 MiB or
-/// more (UninitAllocator), mapped on their own and kept for the next build of the same size
-/// (KeptBlocks). Elsewhere, and for blocks under 2 MiB, nothing changes; a refusal changes
-/// nothing but the speed.
+/// more (UninitAllocator), mapped on their own; a freed block is unmapped at once, or kept in the
+/// KeptBlocks of the caller's BuildContext for its next build. Nothing is kept for the process.
+/// Elsewhere, and for blocks under 2 MiB, nothing changes; a refusal changes nothing but the speed.
 #include <cstddef>
+#include <atomic>
 #include <cstdint>
 #include <mutex>
 #include <new>
@@ -49,22 +50,33 @@ inline constexpr std::size_t mapped_bytes(std::size_t bytes) noexcept {
     return (bytes + huge_page_bytes - 1) & ~(huge_page_bytes - 1);
 }
 
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
+/// Bytes of the blocks map_huge_pages has mapped and not yet unmapped (kept ones included), and how
+/// many times it asked the kernel for a block: what a build leaves behind, and whether a build
+/// reused kept blocks (tests, benchmarks).
+struct MappedBlocks {
+    std::atomic<std::size_t> bytes{0};
+    std::atomic<std::size_t> maps{0};
+};
+inline MappedBlocks& mapped_blocks() noexcept {
+    static MappedBlocks counts;
+    return counts;
+}
+
+inline void unmap_now(void* data, std::size_t size) noexcept;
+
 /// Freed blocks kept for the next block of the same size, up to `limit` bytes in all: the builds
 /// of a program that rebuilds (every frame, a scene's commits, a benchmark) then reuse the pages
 /// of the build before, already on huge pages, instead of the kernel zeroing fresh ones (7% of a
 /// two-thread build of the trefoil) and the first writes faulting them in again. Blocks are kept
 /// by exact size only, so a kept block never serves a smaller request; one that would pass the
-/// limit is unmapped. The cache is never destroyed (a Bvh with static storage may free its
-/// blocks after any other static object is gone).
+/// limit or the capacity is unmapped. Owned by a BuildContext; its blocks are unmapped with it.
 class KeptBlocks {
 public:
-    static constexpr std::size_t limit = std::size_t(128) << 20;
-    // The program's cache; null only if it could not be made (no memory), then nothing is kept.
-    static KeptBlocks* instance() noexcept {
-        static KeptBlocks* const kept = new (std::nothrow) KeptBlocks;
-        return kept;
-    }
+    static constexpr int capacity = 256; // blocks of 2 MiB or more
+    explicit KeptBlocks(std::size_t limit) noexcept : limit_(limit) {}
+    KeptBlocks(const KeptBlocks&) = delete;
+    KeptBlocks& operator=(const KeptBlocks&) = delete;
+    ~KeptBlocks() { release(); }
     // A kept block of exactly `size` mapped bytes, or null.
     void* take(std::size_t size) noexcept {
         const std::lock_guard<std::mutex> lock(mutex_);
@@ -77,43 +89,53 @@ public:
             }
         return nullptr;
     }
-    // Keeps the block (true) or leaves it to the caller to unmap (false: the limit).
+    // Keeps the block (true) or leaves it to the caller to unmap (false: the limit or the capacity).
     bool keep(void* data, std::size_t size) noexcept {
         const std::lock_guard<std::mutex> lock(mutex_);
-        if (count_ == capacity || size > limit - total_) return false;
+        if (count_ == capacity || size > limit_ - total_) return false;
         blocks_[count_++] = {data, size};
         total_ += size;
         return true;
     }
+    // Unmaps every kept block.
+    void release() noexcept {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        for (int k = 0; k < count_; ++k) unmap_now(blocks_[k].data, blocks_[k].size);
+        count_ = 0, total_ = 0;
+    }
+    [[nodiscard]] std::size_t bytes() const noexcept {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        return total_;
+    }
+    [[nodiscard]] std::size_t limit() const noexcept { return limit_; }
 
 private:
-    static constexpr int capacity = 64; // blocks of 2 MiB or more: 128 MiB holds at most 64
     struct Block {
         void* data;
         std::size_t size;
     };
-    std::mutex mutex_;
+    mutable std::mutex mutex_;
     Block blocks_[capacity] = {};
     int count_ = 0;
     std::size_t total_ = 0;
+    std::size_t limit_;
 };
-#endif
 
-/// A block of its own for `bytes` ≥ huge_page_bytes (where maps_huge_pages): a kept one of the same
-/// size (KeptBlocks), or mapped from the kernel, aligned to 2 MiB and advised for huge pages
+/// A block of its own for `bytes` ≥ huge_page_bytes (where maps_huge_pages): one of the same size
+/// from `kept` (when given), or mapped from the kernel, aligned to 2 MiB and advised for huge pages
 /// before anything is written to it; freed with unmap_huge_pages. Its contents are undefined.
 /// Throws std::bad_alloc when the kernel has no memory for it. Why not malloc and
 /// advise_huge_pages: after the first block of a size is freed, glibc serves the next ones from
 /// its heaps (its mmap threshold adapts), whose pages were written before and so stay 4 KiB;
 /// from the second build on, the build's arrays had small pages (2-thread builds of the
 /// trefoil: 47-50 ms in steady state, 39-41 with glibc.malloc.hugetlb=1).
-inline void* map_huge_pages([[maybe_unused]] std::size_t bytes) {
+inline void* map_huge_pages([[maybe_unused]] std::size_t bytes, [[maybe_unused]] KeptBlocks* kept = nullptr) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     constexpr std::uintptr_t huge = huge_page_bytes;
     if (bytes > std::size_t(-1) / 2) throw std::bad_alloc();
     // Whole huge pages, from a 2 MiB boundary that lies within the mapping's first 2 MiB.
     const std::size_t size = mapped_bytes(bytes);
-    if (KeptBlocks* const kept = KeptBlocks::instance())
+    if (kept)
         if (void* const p = kept->take(size)) return p;
     void* const map = mmap(nullptr, size + huge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (map == MAP_FAILED) throw std::bad_alloc();
@@ -121,17 +143,23 @@ inline void* map_huge_pages([[maybe_unused]] std::size_t bytes) {
     if (aligned > at) (void)munmap(map, aligned - at);                                                   // the head
     if (at + huge > aligned) (void)munmap(reinterpret_cast<void*>(aligned + size), at + huge - aligned); // the tail
     (void)madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);
+    mapped_blocks().bytes += size, ++mapped_blocks().maps;
     return reinterpret_cast<void*>(aligned);
 #else
     throw std::bad_alloc(); // not called: maps_huge_pages is false
 #endif
 }
-inline void unmap_huge_pages([[maybe_unused]] void* data, [[maybe_unused]] std::size_t bytes) noexcept {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
+/// Frees a block of map_huge_pages: kept in `kept` (when given and it has room), or unmapped.
+inline void unmap_huge_pages([[maybe_unused]] void* data, [[maybe_unused]] std::size_t bytes,
+                             [[maybe_unused]] KeptBlocks* kept = nullptr) noexcept {
     const std::size_t size = mapped_bytes(bytes);
-    if (KeptBlocks* const kept = KeptBlocks::instance())
-        if (kept->keep(data, size)) return;
+    if (kept && kept->keep(data, size)) return;
+    unmap_now(data, size);
+}
+inline void unmap_now([[maybe_unused]] void* data, [[maybe_unused]] std::size_t size) noexcept {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
     (void)munmap(data, size);
+    mapped_blocks().bytes -= size;
 #endif
 }
 
