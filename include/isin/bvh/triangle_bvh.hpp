@@ -402,11 +402,9 @@ private:
 
 #if defined(ISIN_DETAIL_PACKETS)
     // trace_rest with the rays' set-up made for all 16 at once, in lanes: slab terms (SlabLanes)
-    // and watertight shears (set_shears). One ray at a time, the set-up measured 16 ns of a
-    // diffuse bounce ray's 220 on the terrain; diffuse bounce streams, this against that
-    // (alternated processes, medians of 7, two rounds): 1.08-1.12× as fast on the icospheres,
-    // 1.04-1.05 on the trefoil, 1.02 on the terrain. The packet loads its own rays: a chunk that
-    // is one whole packet needs no more.
+    // and watertight shears (set_shears): one ray at a time, the set-up is a tenth of an
+    // incoherent ray's cost. The packet loads its own rays: a chunk that is one whole packet
+    // needs no more.
     template <Visit visit, class Rays>
     void trace_rest_in_lanes(const Rays& rays, std::size_t first, int n, unsigned rest, const float* t_max,
                              Hit<float>* hits, std::uint8_t* blocked, const HitFilter& filter) const noexcept {
@@ -549,9 +547,8 @@ private:
 
     // The packet's results into the caller's arrays: the nearest hits, or whether each ray is
     // blocked (it left the packet). A whole packet's hits go by four 4×4 transposes (t, u, v
-    // and primitive of a hit in one 128-bit store) rather than field by field: camera-ray
-    // streams 1.02× as fast, median of 24 A/Bs on the five meshes (0.97-1.07; stop 39, same process,
-    // medians of 11-15). Five 512-bit stores of the five fields (a permute each) ran 0.84-0.90×.
+    // and primitive of a hit in one 128-bit store) rather than field by field, or five 512-bit
+    // stores with a permute each (slower: docs/ideas.md).
     template <Visit visit>
     static void finish_packet(const PacketTrace& s, unsigned lanes, std::size_t first, Hit<float>* hits,
                               std::uint8_t* blocked) noexcept {
@@ -697,12 +694,9 @@ private:
     // The triangles of a block some ray of the packet may hit: the packet's interval test on each
     // triangle's box (packet_hit_boxes), whose margin covers how far from a triangle the
     // watertight test can find a hit (make_packet). A triangle's test does not depend on the
-    // others of its block (triangles_avx2.hpp), so the rest need no test. Measured (1920×1080,
-    // one thread, same process, medians of 15, three runs): primary rays of the terrain 75 →
-    // 70 ms and of the 82k icosphere 43 → 40-41 (6.5 → 3.1 and 6.0 → 2.0 triangles tested a
-    // block), the terrain's shadow rays 63 → 60. Always inlined into the packet's leaf test:
-    // shadow-ray streams 1.03-1.07× as fast on the trefoil, terrain and 82k icosphere, the soup
-    // 1.01, the 1.3M icosphere 0.99, camera rays 0.98-1.02 (stop 40, same process, medians of 11).
+    // others of its block (triangles_avx2.hpp), so the rest need no test: on coherent meshes it
+    // leaves about half of a block's triangles untested. Always inlined into the packet's leaf
+    // test, whose loop a call would break.
     ISIN_DETAIL_INLINE static unsigned triangles_in_reach(const typename TriangleBlocks<float>::Block& block,
                                                           const detail::RayPacket& p) noexcept {
         const auto planes = [&](int a, __m256& near, __m256& far) {
@@ -723,12 +717,8 @@ private:
     // A packet's leaf with the rays in lanes, triangle by triangle (test_block_rays), a group of
     // rays whose shears permute the axes alike at a time (most packets are one group). A group
     // with fewer rays than half the block's triangles is left to the rays one by one (two per
-    // register). Measured against two rays per register for every group (same process, -O3
-    // -march=native, medians of 9, two runs; primary / shadow rays): 82k icosphere 1.24-1.26 /
-    // 1.35-1.47, trefoil 1.11-1.15 / 1.05-1.12, terrain 1.08-1.17 / 1.18-1.19, 1.3M icosphere
-    // 0.97-1.21 / 1.04-1.07, soup 1.18-1.22 / 0.97-1.00. Every group in lanes: the same within
-    // noise, but soup shadows 0.85; groups of at least as many rays as triangles: the same but 1.3M
-    // primary 0.86-1.06.
+    // register): small groups leave most lanes of a triangle-by-triangle test empty, and a
+    // threshold of as many rays as triangles was slower on the large meshes.
     // Nearest hits go into `best` (keep_nearest in lanes) and lower t_far; occluded rays into
     // `done`. Returns the rays left for one by one: those groups, the rays some triangle's test
     // is not trusted for, and the rays without a shear.
@@ -799,15 +789,10 @@ private:
     }
 
     // How far ahead of the chunk being traced stream() asks for its rays: two pairs of chunks
-    // (stream() takes a pair at a time). Measured against one pair ahead (stop 38, same process,
-    // medians of 11): shadow rays 1.04-1.06× as fast on the terrain, trefoil and 82k icosphere,
-    // the soup's 1.00; camera rays and diffuse bounces 0.99-1.01×.
+    // (stream() takes a pair at a time): one pair ahead left shadow rays waiting for their loads.
     static constexpr std::size_t prefetch_ahead = 64;
     // Asks the cache for the 16 rays from `first` on (and their t_max): the chunks read them one
     // after the other, but each chunk's walk between the reads touches much other memory.
-    // Measured (stop 37, 2-core Zen 5, headers with and without alternated in one process,
-    // medians of 10-14): camera rays 1.004-1.016× as fast on the terrain, 1.3M icosphere and
-    // trefoil; shadow rays 1.004-1.021×, diffuse bounces 1.002-1.016× (terrain, trefoil, soup).
     static void prefetch_chunk(const Ray<T>* rays, std::size_t first, std::size_t count, const T* t_max) noexcept {
         const std::size_t end = std::min(count, first + 16);
         detail::prefetch_lines(rays + first, (end - first) * sizeof(Ray<T>));
