@@ -30,7 +30,6 @@
 #include "baldwin_weber.hpp"
 #include "batch.hpp"
 #include "bvh.hpp"
-#include "bvh/serialize.hpp"
 #include "camera.hpp"
 #include "color.hpp"
 #include "culling.hpp"
@@ -54,3 +53,9 @@
 #include "triangle.hpp"
 #include "vec.hpp"
 #include "version.hpp"
+
+// Bvh::save, load and load_from_memory are file code, compiled once like the readers: in the
+// ISIN_IMPLEMENTATION file (CMake's isin::io), or where bvh/serialize.hpp is included.
+#if defined(ISIN_IMPLEMENTATION)
+#include "bvh/serialize.hpp"
+#endif

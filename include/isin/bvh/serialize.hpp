@@ -507,3 +507,13 @@ Bvh<T> Bvh<T>::load_from_memory(const void* data, std::size_t size, ReadLimits l
 }
 
 } // namespace isin
+
+#if defined(ISIN_IMPLEMENTATION)
+// The file that compiles isin's file code compiles these too, for users who include isin.hpp alone.
+template void isin::Bvh<float>::save(const std::string&) const;
+template isin::Bvh<float> isin::Bvh<float>::load(const std::string&, isin::ReadLimits);
+template isin::Bvh<float> isin::Bvh<float>::load_from_memory(const void*, std::size_t, isin::ReadLimits);
+template void isin::Bvh<double>::save(const std::string&) const;
+template isin::Bvh<double> isin::Bvh<double>::load(const std::string&, isin::ReadLimits);
+template isin::Bvh<double> isin::Bvh<double>::load_from_memory(const void*, std::size_t, isin::ReadLimits);
+#endif

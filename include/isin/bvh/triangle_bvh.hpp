@@ -259,7 +259,8 @@ public:
     }
 
     /// Writes the Bvh to the file `path` (docs/bvh_format.md), atomically; throws BvhFileError (a
-    /// std::runtime_error) naming the file. Defined in bvh/serialize.hpp: include it to call it.
+    /// std::runtime_error) naming the file. File code: compiled in the ISIN_IMPLEMENTATION file
+    /// (isin::io), or include bvh/serialize.hpp to compile it where it is called.
     void save(const std::string& path) const;
     /// The Bvh saved in the file `path`, checked (sizes, checksum, every index) and not rebuilt;
     /// throws BvhFileError naming the file and what is wrong. Defined in bvh/serialize.hpp.
