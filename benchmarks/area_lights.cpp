@@ -58,7 +58,6 @@ int main(int argc, char** argv) {
     const isin::Camera<float> camera{width, height};
     isin::RenderOptions opt;
     opt.threads = 1;
-    opt.progress = false;
     opt.samples = reference_pixels;
     opt.light_samples = reference_samples;
     opt.adaptive_light_samples = false;

@@ -30,7 +30,6 @@ void run(int threads, int depth, int repeats) {
     isin::RenderOptions opt;
     opt.threads = threads;
     opt.max_depth = depth;
-    opt.progress = false;
     std::vector<double> ms;
     isin::RenderStats stats;
     unsigned checksum = 0;
@@ -92,7 +91,6 @@ void smooth_shading(int threads, int repeats) {
     const isin::Camera<float> camera{800, 450};
     isin::RenderOptions opt;
     opt.threads = threads;
-    opt.progress = false;
     opt.max_depth = 1;
     std::vector<double> ms[3];
     for (int i = 0; i < repeats; ++i)
@@ -146,7 +144,6 @@ void tiles_against_pixels(const char* name, const S& scene, int threads, int dep
     isin::RenderOptions opt;
     opt.threads = threads;
     opt.max_depth = depth;
-    opt.progress = false;
     std::vector<double> tiles, pixels;
     bool same = true;
     for (int i = 0; i < repeats; ++i) {
@@ -191,7 +188,6 @@ void area_lights(int threads, int samples, int repeats) {
     const isin::Camera<float> camera{800, 450};
     isin::RenderOptions opt;
     opt.threads = threads;
-    opt.progress = false;
     opt.light_samples = samples;
     std::vector<double> ms[3];
     std::uint64_t shadow[3] = {};

@@ -84,6 +84,7 @@ int main(int argc, char** argv) {
     example::Options o;
     o.output = "mesh_view.png";
     isin::RenderOptions opt;
+    opt.progress = example::progress_bar();
     isin::ModelOptions load;
     std::optional<isin::Vec3f> eye_option, target_option;
     isin::Vec3f up{0, 1, 0};

@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
     try {
         auto scene = note_scene::make<float>();
         isin::RenderOptions opt;
+        opt.progress = example::progress_bar();
         example::apply_lighting(scene, o, opt, 1.0f);
         opt.threads = o.threads;
         opt.samples = o.samples;

@@ -3,11 +3,18 @@
 // exit status 2, and the common --width, --height, --output, --threads, --samples, --help, and
 // the pieces a job scheduler can run apart: --tile I/N (a band of rows) and --frames A..B (frames
 // of a camera path).
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
+
+#if defined(__unix__) || defined(__APPLE__)
+#include <unistd.h>
+#endif
 
 #include <isin/image_io.hpp>
 #include <isin/render.hpp>
@@ -20,6 +27,34 @@ namespace example {
 [[noreturn]] inline void fail(const char* program, const std::string& why, const char* usage) {
     std::fprintf(stderr, "%s: %s\n%s", program, why.c_str(), usage);
     std::exit(2);
+}
+
+/// A progress bar on stderr for RenderOptions::progress: drawn when stderr is a terminal, once the
+/// render has taken a second, at most every 100 ms; none otherwise.
+inline std::function<void(int, int)> progress_bar() {
+#if defined(__unix__) || defined(__APPLE__)
+    if (!isatty(STDERR_FILENO)) return {};
+#else
+    return {};
+#endif
+    struct Bar {
+        std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now(), last = start;
+        bool shown = false;
+    };
+    auto bar = std::make_shared<Bar>(); // the callback is copied into the options
+    return [bar](int done, int rows) {
+        const auto now = std::chrono::steady_clock::now();
+        if (done >= rows) {
+            if (bar->shown) std::fprintf(stderr, "\r[%s] 100%%\n", "########################################");
+            return;
+        }
+        if (now - bar->start < std::chrono::seconds(1) || now - bar->last < std::chrono::milliseconds(100)) return;
+        bar->last = now, bar->shown = true;
+        const int filled = 40 * done / rows;
+        std::fprintf(stderr, "\r[%.*s%*s] %3d%%", filled, "########################################", 40 - filled, "",
+                     100 * done / rows);
+        std::fflush(stderr);
+    };
 }
 
 /// The value after option argv[i] (i moves onto it); fails if there is none.

@@ -233,7 +233,6 @@ int main(int argc, char** argv) {
     int width = 0, height = 0, frames = 60;
     example::FrameRange range;
     isin::RenderOptions opt;
-    opt.progress = false;
     auto fail = [&](const std::string& why) { example::fail("walk", why, usage); };
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];

@@ -145,7 +145,6 @@ TEST_CASE_TEMPLATE("RectLight on a diffuse floor: every pixel within 1 level of 
                    float, double) {
     const FloorScene<T> fs(false);
     isin::RenderOptions opt;
-    opt.progress = false;
     opt.light_samples = 256;
     for (bool adaptive : {false, true}) {
         opt.adaptive_light_samples = adaptive;
@@ -161,7 +160,6 @@ TEST_CASE_TEMPLATE("RectLight penumbra behind an edge: mean ≤ 0.5, RMS ≤ 1.5
                    T, float, double) {
     const FloorScene<T> fs(true);
     isin::RenderOptions opt;
-    opt.progress = false;
     opt.adaptive_light_samples = false;
     opt.light_samples = 256;
     const Summary s = summarise(errors(fs, 32, 18, opt));
@@ -214,7 +212,6 @@ TEST_CASE_TEMPLATE("RectLight renders: the same pixels on 1 and 2 threads, in ba
     fs.scene.add(isin::Triangle<T>{{-5, -9, 40}, {5, -9, 40}, {0, 5, 45}}, fs.scene.add_material(shiny));
     const isin::Camera<T> camera{40, 24, {0, 0, 0}, T(0), T(-0.5)};
     isin::RenderOptions opt;
-    opt.progress = false;
     opt.light_samples = 16;
     for (bool adaptive : {false, true}) {
         opt.adaptive_light_samples = adaptive;
@@ -248,7 +245,6 @@ TEST_CASE("render: light_samples outside [1, max_light_samples] throws") {
     FloorScene<float> fs(false);
     const isin::Camera<float> camera{8, 8};
     isin::RenderOptions opt;
-    opt.progress = false;
     for (int bad : {0, -3, isin::RenderOptions::max_light_samples + 1}) {
         opt.light_samples = bad;
         CHECK_THROWS_AS((void)isin::render(fs.scene, camera, opt), std::invalid_argument);

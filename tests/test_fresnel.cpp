@@ -125,7 +125,6 @@ TEST_CASE_TEMPLATE("Material::fresnel: render's streams give trace()'s colours",
     const auto scene = slab_scene<T>(true);
     const isin::Camera<T> camera{24, 16, {0, 0, 0}, T(0.6), T(0)};
     isin::RenderOptions opt;
-    opt.progress = false;
     opt.threads = 1;
     const isin::Image image = isin::render(scene, camera, opt);
     isin::RenderStats stats;

@@ -57,7 +57,6 @@ TEST_CASE("§3 §5 render at 800×450: the pixels around GD = (0,0,10) show blue
     const auto scene = note_scene::make<float>();
     const isin::Camera<float> cam{800, 450};
     isin::RenderOptions opt;
-    opt.progress = false;
     const auto image = isin::render(scene, cam, opt);
     REQUIRE(image.width() == 800);
     REQUIRE(image.height() == 450);
@@ -78,7 +77,6 @@ TEST_CASE("§9 render: a floor pixel in a known shadow is darker than its lit ne
     const auto scene = note_scene::make<float>(false); // plain floor: shadow is the only change
     const isin::Camera<float> cam{800, 450};
     isin::RenderOptions opt;
-    opt.progress = false;
     const auto image = isin::render(scene, cam, opt);
     // Find a floor pixel that an opaque object hides from the first light, and whose neighbour four
     // pixels to the right the light sees.
@@ -116,7 +114,6 @@ TEST_CASE("render: float and double images of the note's scene differ in < 0.5% 
     const isin::Camera<float> cam_f{800, 450};
     const isin::Camera<double> cam_d{800, 450};
     isin::RenderOptions opt;
-    opt.progress = false;
     const auto f = isin::render(note_scene::make<float>(), cam_f, opt);
     const auto d = isin::render(note_scene::make<double>(), cam_d, opt);
     long differ = 0;
@@ -133,7 +130,6 @@ TEST_CASE("render: threads, supersampling and culling options") {
     const auto scene = note_scene::make<float>();
     const isin::Camera<float> cam{160, 90};
     isin::RenderOptions opt;
-    opt.progress = false;
     opt.threads = 1;
     isin::RenderStats one_stats, two_stats;
     const auto one = isin::render(scene, cam, opt, &one_stats);
@@ -169,7 +165,6 @@ TEST_CASE("camera: a sphere in the middle of a 400×400, 300×600 or 600×300 im
     scene.add(isin::Sphere<float>{{0, 0, 50}, 10}, scene.add_material({}));
     scene.add_light({{0, 0, 0}});
     isin::RenderOptions opt;
-    opt.progress = false;
     for (const auto& size : {std::pair{400, 400}, std::pair{300, 600}, std::pair{600, 300}}) {
         const int w = size.first;
         const int h = size.second;
@@ -225,7 +220,6 @@ TEST_CASE("render_rows: bands rendered apart and stacked are the whole render, b
     const auto scene = note_scene::make<float>();
     isin::Camera<float> cam{96, 54, {3, 1, -2}, 0.2f, -0.05f};
     isin::RenderOptions opt;
-    opt.progress = false;
     opt.samples = 2;
     opt.culling = isin::Culling::projected;
     opt.threads = 2;
@@ -268,7 +262,6 @@ TEST_CASE_TEMPLATE("§11 render: both culling methods drop a triangle turned awa
     scene.add_light({{0, 0, 0}});
     const isin::Camera<T> cam{81, 45};
     isin::RenderOptions opt;
-    opt.progress = false;
     const auto seen = isin::render(scene, cam, opt)(40, 22);
     CHECK(seen.b > 0);
     CHECK(seen.r == 0);
@@ -298,7 +291,6 @@ TEST_CASE_TEMPLATE("§10 render: an image texture on a rectangle of two right tr
     scene.add_textured_rectangle({-20, 20, 50}, {20, 20, 50}, {-20, -20, 50}, scene.add_material(m));
     const isin::Camera<T> cam{64, 36};
     isin::RenderOptions opt;
-    opt.progress = false;
     const auto image = isin::render(scene, cam, opt);
     CHECK(image(24, 10) == isin::Rgb8{255, 0, 0});     // upper left
     CHECK(image(40, 10) == isin::Rgb8{0, 255, 0});     // upper right
@@ -339,7 +331,6 @@ TEST_CASE_TEMPLATE("scene: a placed mesh (its Bvh) and the same triangles one by
     // Culling through the Bvh's leaf test: a closed mesh seen from outside looks the same with and
     // without (its back faces are hidden anyway), and the same as the one-by-one culled scene.
     isin::RenderOptions opt;
-    opt.progress = false;
     const auto plain = isin::render(meshed, cam, opt);
     opt.culling = isin::Culling::dot_product;
     CHECK(isin::render(meshed, cam, opt).pixels() == plain.pixels());
@@ -385,7 +376,6 @@ TEST_CASE("render: threads that cannot start leave their rows to the others, sam
     const auto scene = note_scene::make<float>();
     const isin::Camera<float> cam{64, 36};
     isin::RenderOptions opt;
-    opt.progress = false;
     opt.threads = 1;
     const isin::Image reference = isin::render(scene, cam, opt);
     opt.threads = 4;
@@ -404,7 +394,6 @@ TEST_CASE("render: an exception thrown in a worker (a user primitive) reaches th
     scene.add(user::Trap<float>{{{3, 0, 20}, 2}}, m);
     scene.add_light({{0, 10, 0}});
     isin::RenderOptions opt;
-    opt.progress = false;
     for (int threads : {1, 2, 3}) {
         opt.threads = threads;
         CHECK_THROWS_WITH_AS((void)isin::render(scene, isin::Camera<float>{48, 27}, opt), "the trap was hit",
@@ -420,7 +409,6 @@ TEST_CASE(
     const auto m = scene.add_material(textured);
     scene.add_textured_rectangle({-10, -10, 20}, {10, -10, 20}, {-10, 10, 20}, m);
     isin::RenderOptions opt;
-    opt.progress = false;
     const isin::Camera<float> cam{32, 18};
     CHECK_THROWS_AS((void)isin::render(scene, cam, opt), std::out_of_range);
     isin::RenderStats stats;
@@ -446,7 +434,6 @@ TEST_CASE("render: max_depth is bounded; at the bound two facing mirrors render 
     scene.add(isin::Triangle<float>{{s, -s, -10}, {s, s, -10}, {-s, s, -10}}, m);
     scene.add_light({{0, 0, 0}});
     isin::RenderOptions opt;
-    opt.progress = false;
     opt.threads = 2;
     const isin::Camera<float> cam{16, 9};
     opt.max_depth = 20000; // overflowed the stack
@@ -481,7 +468,6 @@ TEST_CASE("RenderStats: rays() adds the four kinds in 64 bits; mrays_per_second 
     // A render's own stats: its rays over its wall time.
     const auto scene = note_scene::make<float>();
     isin::RenderOptions opt;
-    opt.progress = false;
     isin::RenderStats measured;
     (void)isin::render(scene, isin::Camera<float>{32, 18}, opt, &measured);
     REQUIRE(measured.seconds > 0);
@@ -521,7 +507,6 @@ bool render_is_trace_per_pixel(const S& scene, const isin::Camera<typename S::va
 TEST_CASE_TEMPLATE("render: blocks of 8×8 pixels through the stream calls give each pixel trace()'s colour", T, float,
                    double) {
     isin::RenderOptions opt;
-    opt.progress = false;
     opt.threads = 2;
     // The note's scene (glass: shadow rays one by one) at a size that leaves partial tiles.
     const auto note = note_scene::make<T>();
@@ -821,4 +806,35 @@ TEST_CASE_TEMPLATE("hits_into_lanes and surface_pass: Scene::surface's point, bo
     }
     CHECK(longest_run > 8); // runs of many hits on one primitive were met
     CHECK(textured > 6);    // and textured hits (with one colour each)
+}
+
+TEST_CASE("render: progress reports rows done, rising, ending once with every row, on any threads") {
+    const auto scene = note_scene::make<float>();
+    const isin::Camera<float> cam{160, 90};
+    for (int threads : {1, 2, 3}) {
+        CAPTURE(threads);
+        std::vector<std::pair<int, int>> calls; // only worker 0 reports during the render, then the caller
+        isin::RenderOptions opt;
+        opt.threads = threads;
+        opt.progress = [&](int done, int rows) { calls.emplace_back(done, rows); };
+        const auto image = isin::render(scene, cam, opt);
+        REQUIRE(!calls.empty());
+        CHECK(calls.back() == std::pair<int, int>{90, 90});
+        int last = 0, finals = 0;
+        for (const auto& [done, rows] : calls) {
+            CHECK(rows == 90);
+            CHECK(done >= last);
+            CHECK(done <= rows);
+            finals += done == rows;
+            last = done;
+        }
+        CHECK(finals == 1);
+        isin::RenderOptions quiet; // no callback: the same picture
+        quiet.threads = threads;
+        CHECK(isin::render(scene, cam, quiet).pixels() == image.pixels());
+    }
+    isin::RenderOptions failing; // a callback's exception reaches the caller
+    failing.threads = 2;
+    failing.progress = [](int, int) { throw std::runtime_error("stop here"); };
+    CHECK_THROWS_AS((void)isin::render(scene, cam, failing), std::runtime_error);
 }

@@ -165,7 +165,6 @@ TEST_CASE_TEMPLATE("scene: placed meshes (rotated, scaled, mirrored, moved) hit 
     CHECK(normal_differ == 0);
     // Culling keeps each placement's outside, mirrored or not: the closed meshes look the same.
     isin::RenderOptions opt;
-    opt.progress = false;
     placed.add_light({{0, 50, 0}});
     const isin::Camera<T> cam{96, 54};
     const auto plain = isin::render(placed, cam, opt);

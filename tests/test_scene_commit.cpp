@@ -48,7 +48,6 @@ TEST_CASE_TEMPLATE("scene: rendered without commit(), the same picture as commit
 
     const isin::Camera<T> cam{64, 36};
     isin::RenderOptions opt;
-    opt.progress = false;
     opt.threads = 2;
     const isin::Image a = isin::render(committed, cam, opt);
     const isin::Image b = isin::render(lazy, cam, opt);

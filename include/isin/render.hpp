@@ -8,16 +8,11 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#if defined(__unix__) || defined(__APPLE__)
-#include <unistd.h>
-#define ISIN_HAVE_ISATTY 1
-#endif
 
 #include "area_light.hpp"
 #include "camera.hpp"
@@ -43,7 +38,10 @@ struct RenderOptions {
     int max_depth = 4;               ///< longest chain of reflected/transmitted rays, 0 … max_depth_limit
     bool shadows = true;             ///< cast shadow rays (§9)
     Culling culling = Culling::none; ///< backface culling for primary rays (§11)
-    bool progress = true;            ///< progress bar on stderr, when it is a terminal and the render takes > 1 s
+    /// Called as rows finish, with the rows done and the rows to render (last with both equal, on
+    /// the calling thread); earlier calls come from one worker thread. Empty: no calls. The library
+    /// prints nothing itself (the examples print a bar: examples/options.hpp).
+    std::function<void(int rows_done, int rows)> progress;
     /// How the image's bytes encode the linear intensities shaded: byte = 255·intensity, the
     /// note's arithmetic (default), or sRGB, what screens and image viewers expect (pair it with
     /// textures decoded from sRGB: ModelOptions::textures, ImageTexture's encoding).
@@ -813,17 +811,10 @@ template <class T, template <class> class... S>
     bool opaque = true; // nothing transparent: a shadow ray's transmittance is 0 or 1
     for (const Material<T>& m : scene.materials) opaque = opaque && m.transparency == T(0);
     std::vector<RenderStats> per_worker(static_cast<std::size_t>(threads)); // summed after the join: no lock
-#ifdef ISIN_HAVE_ISATTY
-    const bool show_progress = opt.progress && isatty(STDERR_FILENO);
-#else
-    const bool show_progress = false;
-#endif
-    bool progress_shown = false;
 
     auto work = [&](int worker, const detail::FirstError& error) {
-        const bool reporter = worker == 0;
+        const bool reporter = worker == 0 && opt.progress;
         RenderStats local; // on the worker's own stack: no false sharing while counting
-        auto last_report = start;
         for (int band; !error.failed() && (band = next_band.fetch_add(1)) < bands;) {
             const int row0 = 8 * band, band_rows = std::min(8, rows - row0);
             for (int x0 = 0; x0 < W; x0 += 8) {
@@ -869,27 +860,12 @@ template <class T, template <class> class... S>
                 }
             }
             const int done = rows_done.fetch_add(band_rows) + band_rows;
-            if (reporter && show_progress) {
-                const auto now = std::chrono::steady_clock::now();
-                if (now - start > std::chrono::seconds(1) && now - last_report > std::chrono::milliseconds(100)) {
-                    last_report = now;
-                    progress_shown = true;
-                    const int filled = 40 * done / rows;
-                    std::fprintf(stderr, "\r[%.*s%*s] %3d%%", filled, "########################################",
-                                 40 - filled, "", 100 * done / rows);
-                    std::fflush(stderr);
-                }
-            }
+            if (reporter && done < rows) opt.progress(done, rows);
         }
         per_worker[std::size_t(worker)] = local;
     };
-    try {
-        detail::run_workers(threads, work);
-    } catch (...) {
-        if (progress_shown) std::fputc('\n', stderr);
-        throw;
-    }
-    if (progress_shown) std::fprintf(stderr, "\r[%s] 100%%\n", "########################################");
+    detail::run_workers(threads, work);
+    if (opt.progress) opt.progress(rows, rows);
     RenderStats total;
     for (const RenderStats& s : per_worker) total += s;
     total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
