@@ -6,6 +6,7 @@
 #include <doctest/doctest.h>
 
 #include "approx.hpp"
+#include "common/solids.hpp"
 
 #include <algorithm>
 #include <array>
@@ -76,35 +77,7 @@ isin::Mesh<T> cube() {
 /// An icosphere of radius 1 round the origin by index (each vertex once), front faces outside.
 template <class T>
 isin::Mesh<T> icosphere(int levels) {
-    const double p = 1.6180339887498949;
-    std::vector<isin::Vertex<double>> v{{-1, p, 0},  {1, p, 0},  {-1, -p, 0}, {1, -p, 0}, {0, -1, p},  {0, 1, p},
-                                        {0, -1, -p}, {0, 1, -p}, {p, 0, -1},  {p, 0, 1},  {-p, 0, -1}, {-p, 0, 1}};
-    for (auto& q : v) q = isin::normalize(q);
-    std::vector<std::array<std::uint32_t, 3>> f{{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                                                {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                                                {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                                                {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-    for (int l = 0; l < levels; ++l) {
-        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> middle;
-        const auto mid = [&](std::uint32_t a, std::uint32_t b) {
-            const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-            const auto it = middle.find(key);
-            if (it != middle.end()) return it->second;
-            v.push_back(isin::normalize(v[a] + v[b]));
-            return middle[key] = static_cast<std::uint32_t>(v.size() - 1);
-        };
-        std::vector<std::array<std::uint32_t, 3>> finer;
-        for (const auto& t : f) {
-            const std::uint32_t a = mid(t[0], t[1]), b = mid(t[1], t[2]), c = mid(t[2], t[0]);
-            finer.insert(finer.end(), {{t[0], a, c}, {a, t[1], b}, {c, b, t[2]}, {a, b, c}});
-        }
-        f.swap(finer);
-    }
-    isin::Mesh<T> mesh;
-    for (const auto& q : v) mesh.positions.push_back({T(q.x), T(q.y), T(q.z)});
-    mesh.indices = f;
-    orient_outward(mesh, {T(0), T(0), T(0)});
-    return mesh;
+    return solids::icosphere<T>(levels);
 }
 
 template <class T>

@@ -188,27 +188,44 @@ struct WatertightShear {
     }
 };
 
+/// Triangle A, B, C (vertices relative to the ray's origin) sheared onto the ray's frame (WBW
+/// §3): the vertices across the ray, and the three 2D edge functions, each with an exact sign.
+template <class T>
+struct ShearedTriangle {
+    T Ax, Ay, Bx, By, Cx, Cy;
+    T U, V, W;
+
+    ShearedTriangle(const Vertex<T>& A, const Vertex<T>& B, const Vertex<T>& C, const WatertightShear<T>& s) noexcept
+        : Ax(component(A, s.kx) - s.Sx * component(A, s.kz)), // WBW: Ax = A[kx] − Sx·A[kz]
+          Ay(component(A, s.ky) - s.Sy * component(A, s.kz)), Bx(component(B, s.kx) - s.Sx * component(B, s.kz)),
+          By(component(B, s.ky) - s.Sy * component(B, s.kz)), Cx(component(C, s.kx) - s.Sx * component(C, s.kz)),
+          Cy(component(C, s.ky) - s.Sy * component(C, s.kz)),
+          U(difference_of_products(Cx, By, Cy, Bx)), // WBW: edge functions, exact sign
+          V(difference_of_products(Ax, Cy, Ay, Cx)), W(difference_of_products(Bx, Ay, By, Ax)) {}
+
+    /// t·det: the edge functions weighting the vertices' depths along the ray (WBW: Az = Sz·A[kz]).
+    [[nodiscard]] T t_det(const Vertex<T>& A, const Vertex<T>& B, const Vertex<T>& C,
+                          const WatertightShear<T>& s) const noexcept {
+        const T Az = s.Sz * component(A, s.kz), Bz = s.Sz * component(B, s.kz), Cz = s.Sz * component(C, s.kz);
+        return U * Az + V * Bz + W * Cz; // WBW: t·det
+    }
+};
+
 /// The watertight test's per-triangle part (WBW §3) for vertices A, B, C relative to the ray's
 /// origin; the caller rejects degenerate triangles (intersect_watertight on the hit path only,
 /// Bvh at build time).
 template <class T>
 [[nodiscard]] inline Hit<T> intersect_sheared(const Vertex<T>& A, const Vertex<T>& B, const Vertex<T>& C,
                                               const WatertightShear<T>& s, bool cull_backfaces) noexcept {
-    const int kx = s.kx, ky = s.ky, kz = s.kz;
-    const T Ax = component(A, kx) - s.Sx * component(A, kz), Ay = component(A, ky) - s.Sy * component(A, kz);
-    const T Bx = component(B, kx) - s.Sx * component(B, kz), By = component(B, ky) - s.Sy * component(B, kz);
-    const T Cx = component(C, kx) - s.Sx * component(C, kz), Cy = component(C, ky) - s.Sy * component(C, kz);
-    const T U = difference_of_products(Cx, By, Cy, Bx); // WBW: edge functions, exact sign
-    const T V = difference_of_products(Ax, Cy, Ay, Cx);
-    const T W = difference_of_products(Bx, Ay, By, Ax);
+    const ShearedTriangle<T> e(A, B, C, s);
+    const T U = e.U, V = e.V, W = e.W;
     const bool any_negative = U < T(0) || V < T(0) || W < T(0);
     const bool any_positive = U > T(0) || V > T(0) || W > T(0);
     // Front faces (clockwise seen from the origin, §2) have U, V, W ≥ 0.
     if (cull_backfaces ? any_negative : (any_negative && any_positive)) return Hit<T>::miss();
     const T det = U + V + W;
     if (!(det != T(0))) return Hit<T>::miss();
-    const T Az = s.Sz * component(A, kz), Bz = s.Sz * component(B, kz), Cz = s.Sz * component(C, kz);
-    const T t_scaled = U * Az + V * Bz + W * Cz; // WBW: t·det
+    const T t_scaled = e.t_det(A, B, C, s);
     const T inv_det = T(1) / det;
     const T t = t_scaled * inv_det;
     if (!(t > T(0)) || !(t < std::numeric_limits<T>::infinity())) return Hit<T>::miss();

@@ -41,22 +41,15 @@ template <class T>
 template <class T>
 [[nodiscard]] inline bool crosses(const Vertex<T>& A, const Vertex<T>& B, const Vertex<T>& C,
                                   const WatertightShear<T>& s, T t_max) noexcept {
-    const int kx = s.kx, ky = s.ky, kz = s.kz;
-    const T Ax = component(A, kx) - s.Sx * component(A, kz), Ay = component(A, ky) - s.Sy * component(A, kz);
-    const T Bx = component(B, kx) - s.Sx * component(B, kz), By = component(B, ky) - s.Sy * component(B, kz);
-    const T Cx = component(C, kx) - s.Sx * component(C, kz), Cy = component(C, ky) - s.Sy * component(C, kz);
-    const T U = difference_of_products(Cx, By, Cy, Bx); // WBW: edge functions, exact sign
-    const T V = difference_of_products(Ax, Cy, Ay, Cx);
-    const T W = difference_of_products(Bx, Ay, By, Ax);
+    const ShearedTriangle<T> e(A, B, C, s);
     // E(q) for the ray at q in the sheared plane: U(q) = U + qx·(Cy − By) + qy·(Bx − Cx), etc.
-    const int su = perturbed_sign(U, Cy - By, Bx - Cx);
-    const int sv = perturbed_sign(V, Ay - Cy, Cx - Ax);
-    const int sw = perturbed_sign(W, By - Ay, Ax - Bx);
+    const int su = perturbed_sign(e.U, e.Cy - e.By, e.Bx - e.Cx);
+    const int sv = perturbed_sign(e.V, e.Ay - e.Cy, e.Cx - e.Ax);
+    const int sw = perturbed_sign(e.W, e.By - e.Ay, e.Ax - e.Bx);
     if (su == 0 || su != sv || su != sw) return false;
-    const T det = U + V + W;
-    if (!(det != T(0))) return false; // the ray lies in the triangle's plane: no crossing
-    const T Az = s.Sz * component(A, kz), Bz = s.Sz * component(B, kz), Cz = s.Sz * component(C, kz);
-    const T t = (U * Az + V * Bz + W * Cz) / det; // WBW: t = (U·Az + V·Bz + W·Cz)/det
+    const T det = e.U + e.V + e.W;
+    if (!(det != T(0))) return false;      // the ray lies in the triangle's plane: no crossing
+    const T t = e.t_det(A, B, C, s) / det; // WBW: t = (U·Az + V·Bz + W·Cz)/det
     return t > T(0) && t < t_max;
 }
 
