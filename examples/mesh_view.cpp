@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -165,13 +166,24 @@ int main(int argc, char** argv) {
         }
         // Frame the bounding sphere: it fits at distance r / sin(a), a the smaller of the vertical
         // and horizontal half-angles of the view, plus 15%.
-        const isin::Vec3f centre = target_option ? *target_option : (lo + hi) * 0.5f;
+        isin::Vec3f centre = target_option ? *target_option : lo * 0.5f + hi * 0.5f; // no overflow near float's max
         const float radius = std::max(0.5f * isin::length(hi - lo), 1e-6f);
         const double half_v = 0.5 * static_cast<double>(fov) * 3.141592653589793 / 180;
         const double half_h = std::atan(std::tan(half_v) * (o.width - 1) / (o.height - 1));
         const float distance = float(1.15 * static_cast<double>(radius) / std::sin(std::min(half_v, half_h)));
-        const isin::Vec3f view = eye_option ? *eye_option - centre // from the target to the eye
-                                            : distance * isin::normalize(isin::Vec3f{0.45f, 0.5f, -1.0f});
+        isin::Vec3f view = eye_option ? *eye_option - centre // from the target to the eye
+                                      : distance * isin::normalize(isin::Vec3f{0.45f, 0.5f, -1.0f});
+        if (!eye_option && !(isin::is_finite(centre) && isin::is_finite(centre + view))) {
+            // A model near float's range cannot be framed from outside it: look at its centre (or
+            // the origin) from as far as float reaches, which look_at accepts.
+            std::fprintf(stderr, "mesh_view: the model is too large to frame in float; the camera stands inside it\n");
+            if (!isin::is_finite(centre)) centre = {0, 0, 0};
+            const isin::Vec3f direction = isin::normalize(isin::Vec3f{0.45f, 0.5f, -1.0f});
+            float far = std::numeric_limits<float>::max();
+            do far *= 0.5f;
+            while (!isin::is_finite(centre + far * direction));
+            view = far * direction;
+        }
 
         isin::StandardScene<float> scene; // compiled once in isin::io (its sphere list stays empty)
         scene.background = {0.05f, 0.07f, 0.12f};
