@@ -2,8 +2,8 @@
 # Quick start, command 2. Installs what is missing, then:
 #   bash scripts/test.sh         the quick check: the whole unit suite built once (g++, -O1,
 #                                warnings as errors) and run, without the tests that build
-#                                programs of their own (label integration); a few minutes on 2 cores.
-#   bash scripts/test.sh --all   what CI runs (.ci/run), about 25 minutes on 2 cores:
+#                                programs of their own (label integration); 3.5 minutes on 2 cores.
+#   bash scripts/test.sh --all   what CI runs (.ci/run), about 35 minutes on 2 cores:
 #  1. checks the layout of every C++ file (scripts/format.sh --check, .clang-format);
 #  2. runs the stability, BVH, query and lane-filter tests (and the BVH stream and, at -march=native, vertex-normal tests) with g++ and clang++ at -O0 and at -O3 -march=native
 #     (their guarantees must survive any FMA contraction), on the portable path with no vector
