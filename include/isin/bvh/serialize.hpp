@@ -17,6 +17,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -279,56 +280,66 @@ public:
 
         Bvh<T> bvh;
         Tree& tree = bvh.tree_;
+        auto& blocks = bvh.blocks_.blocks_;
         Xxh64 sum;
         sum.update(data, header_bytes);
-        // Read and summed a piece at a time: arrays in pieces of 64 KiB, records 256 at a time.
-        const auto read_array = [&](void* array, std::size_t bytes) {
-            constexpr std::size_t piece = std::size_t(1) << 16;
-            for (std::size_t done = 0; done < bytes; done += piece) {
-                unsigned char* const to = static_cast<unsigned char*>(array) + done;
-                const std::size_t n = std::min(piece, bytes - done);
-                read(to, n);
-                sum.update(to, n);
+        Checker checker(bvh, std::size_t(nodes), std::size_t(leaves), depth);
+        const bool swap = !host_little_endian();
+        // Each part is read a piece at a time, and each piece is summed, put in host order and
+        // checked while it is in cache: one pass over the Bvh's memory in all. A piece is about
+        // 128 KiB: well inside a core's L2, and few enough read calls that their cost is small.
+        const auto piece = [](std::size_t bytes) { return std::max<std::size_t>(1, (std::size_t(1) << 17) / bytes); };
+        // Records of `bytes` each straight into `array`, whose elements have no padding beyond them.
+        const auto read_straight = [&](void* array, std::size_t count, std::size_t bytes, std::size_t words,
+                                       auto&& check) {
+            for (std::size_t i = 0; i < count;) {
+                const std::size_t end = std::min(count, i + piece(bytes));
+                unsigned char* const to = static_cast<unsigned char*>(array) + i * bytes;
+                read(to, (end - i) * bytes);
+                sum.update(to, (end - i) * bytes);
+                if (swap) swap_words(to, (end - i) * bytes / words, words);
+                check(i, end);
+                i = end;
             }
         };
+        // Records of `bytes` each through a buffer of one piece, into `records` (padded structs).
         std::vector<unsigned char> buffer;
-        const auto read_records = [&](auto* records, std::size_t count, std::size_t bytes, std::size_t reals) {
-            buffer.resize(std::min<std::size_t>(count, 256) * bytes);
+        const auto read_padded = [&](auto* records, std::size_t count, std::size_t bytes, std::size_t reals,
+                                     auto&& check) {
+            buffer.resize(std::min(count, piece(bytes)) * bytes);
             for (std::size_t i = 0; i < count;) {
-                const std::size_t end = std::min<std::size_t>(count, i + 256);
+                const std::size_t end = std::min(count, i + piece(bytes)), first = i;
                 read(buffer.data(), (end - i) * bytes);
                 sum.update(buffer.data(), (end - i) * bytes);
                 for (const unsigned char* p = buffer.data(); i < end; ++i, p += bytes)
                     get_record(&records[i], p, bytes, reals);
+                check(first, end);
             }
         };
-        // On huge pages where the kernel has them, as the build's arrays (huge_pages.hpp).
+        const auto nothing = [](std::size_t, std::size_t) {};
+        // On huge pages where the kernel has them, as the build's arrays (huge_pages.hpp); the
+        // blocks' allocator maps its own and leaves them unwritten until they are read into.
         detail::reserve_huge_pages(tree.nodes_, std::size_t(nodes));
         detail::reserve_huge_pages(tree.leaves_, std::size_t(leaves));
         detail::reserve_huge_pages(tree.primitives_, std::size_t(primitives));
         tree.nodes_.resize(std::size_t(nodes));
-        read_records(tree.nodes_.data(), std::size_t(nodes), node_bytes, 48);
+        read_padded(tree.nodes_.data(), std::size_t(nodes), node_bytes, 48,
+                    [&](std::size_t i, std::size_t end) { checker.nodes(i, end); });
         tree.leaves_.resize(std::size_t(leaves));
-        read_array(tree.leaves_.data(), std::size_t(leaves) * leaf_bytes);
+        read_straight(tree.leaves_.data(), std::size_t(leaves), leaf_bytes, 4, nothing);
         tree.primitives_.resize(std::size_t(primitives));
-        read_array(tree.primitives_.data(), std::size_t(primitives) * primitive_bytes);
-        auto& blocks = bvh.blocks_.blocks_;
+        read_straight(tree.primitives_.data(), std::size_t(primitives), primitive_bytes, 4, nothing);
         blocks.resize(std::size_t(leaves));
-        if (sizeof(Block) == block_bytes)
-            read_array(blocks.data(), std::size_t(leaves) * block_bytes);
+        const auto check_blocks = [&](std::size_t i, std::size_t end) { checker.blocks(i, end); };
+        if (sizeof(Block) == block_bytes && !swap)
+            read_straight(blocks.data(), std::size_t(leaves), block_bytes, 1, check_blocks);
         else
-            read_records(blocks.data(), std::size_t(leaves), block_bytes, 72);
+            read_padded(blocks.data(), std::size_t(leaves), block_bytes, 72, check_blocks);
         unsigned char stored[checksum_bytes];
         read(stored, checksum_bytes);
         if (sum.digest() != get64(stored)) throw fail("checksum mismatch (a damaged file)");
-        if (!host_little_endian()) {
-            swap_words(reinterpret_cast<unsigned char*>(tree.leaves_.data()), 2 * tree.leaves_.size(), 4);
-            swap_words(reinterpret_cast<unsigned char*>(tree.primitives_.data()), tree.primitives_.size(), 4);
-            if (sizeof(Block) == block_bytes)
-                for (Block& b : blocks) swap_record(&b, 72);
-        }
         tree.bound_ = T(bound), tree.leaf_scale_ = T(leaf_scale);
-        const std::string wrong = check(bvh, depth);
+        const std::string wrong = checker.finish();
         if (!wrong.empty()) throw fail(wrong);
         return bvh;
     }
@@ -340,71 +351,115 @@ private:
                checksum_bytes;
     }
 
-    // Why the tree and blocks of a decoded Bvh are not a Bvh's, or "": every reference inside its
-    // arrays, each node and leaf reached exactly once from the root down (children after their
-    // parent, so no cycle), no deeper than `depth` and the traversal stack, empty slots with the
-    // empty box (which no ray enters, so no walk follows them), the root's bounds as
-    // `bound`, each block holding its leaf's primitives, padded as the build pads.
-    static std::string check(const Bvh<T>& bvh, std::uint32_t depth) {
-        const Tree& tree = bvh.tree_;
-        const std::size_t nodes = tree.nodes_.size(), leaves = tree.leaves_.size();
-        if (nodes == 0) return "";
-        std::vector<std::uint8_t> level(nodes, 0), reached(leaves, 0);
-        level[0] = 1;
-        std::uint32_t deepest = 0;
-        for (std::size_t i = 0; i < nodes; ++i) {
-            if (!level[i]) return "index out of range: node " + std::to_string(i) + " is not reached from the root";
-            deepest = std::max<std::uint32_t>(deepest, level[i]);
-            for (int k = 0; k < 8; ++k) {
-                const std::uint32_t c = tree.nodes_[i].child[k];
-                if (c == Tree::empty_child) { // never entered only with the empty box: traversal relies on it
-                    if (!empty_box(tree.nodes_[i], k))
-                        return "node " + std::to_string(i) + " child " + std::to_string(k) + " is empty, its box not";
-                    continue;
-                }
-                const auto at = [&] { return "node " + std::to_string(i) + " child " + std::to_string(k); };
-                if (c & Tree::leaf_bit) {
-                    const std::uint32_t leaf = c & ~Tree::leaf_bit;
-                    if (leaf >= leaves)
-                        return "index out of range: " + at() + " is leaf " + std::to_string(leaf) + " of " +
-                               std::to_string(leaves);
-                    if (reached[leaf]++) return at() + ": leaf " + std::to_string(leaf) + " reached twice";
-                } else {
-                    if (c <= i || c >= nodes)
-                        return "index out of range: " + at() + " is node " + std::to_string(c) + " (after " +
-                               std::to_string(i) + ", before " + std::to_string(nodes) + ")";
-                    if (level[c]) return at() + ": node " + std::to_string(c) + " reached twice";
-                    if (level[i] >= depth) return at() + ": deeper than the depth of " + std::to_string(depth);
-                    level[c] = std::uint8_t(level[i] + 1);
+    // Why the tree and blocks of a decoded Bvh are not a Bvh's, found a piece at a time as decode
+    // reads them (nodes first, then the blocks after the leaves and primitives), the first reason
+    // kept: every reference inside its arrays, each node and leaf reached exactly once from the
+    // root down (children after their parent, so no cycle), no deeper than `depth` and the
+    // traversal stack, empty slots with the empty box (which no ray enters, so no walk follows
+    // them), the root's bounds as the header's bound, each block holding its leaf's primitives,
+    // padded as the build pads.
+    class Checker {
+    public:
+        Checker(const Bvh<T>& bvh, std::size_t nodes, std::size_t leaves, std::uint32_t depth)
+            : bvh_(bvh), level_(nodes, 0), reached_(leaves, 0), depth_(depth) {
+            if (nodes) level_[0] = 1;
+        }
+
+        // Checks nodes [begin, end), after those before them.
+        void nodes(std::size_t begin, std::size_t end) {
+            const Tree& tree = bvh_.tree_;
+            const std::size_t nodes = level_.size(), leaves = reached_.size();
+            for (std::size_t i = begin; i < end && wrong_.empty(); ++i) {
+                if (!level_[i])
+                    return set("index out of range: node " + std::to_string(i) + " is not reached from the root");
+                deepest_ = std::max<std::uint32_t>(deepest_, level_[i]);
+                for (int k = 0; k < 8; ++k) {
+                    const std::uint32_t c = tree.nodes_[i].child[k];
+                    if (c == Tree::empty_child) { // never entered only with the empty box: traversal relies on it
+                        if (!empty_box(tree.nodes_[i], k))
+                            return set("node " + std::to_string(i) + " child " + std::to_string(k) +
+                                       " is empty, its box not");
+                        continue;
+                    }
+                    const auto at = [&] { return "node " + std::to_string(i) + " child " + std::to_string(k); };
+                    if (c & Tree::leaf_bit) {
+                        const std::uint32_t leaf = c & ~Tree::leaf_bit;
+                        if (leaf >= leaves)
+                            return set("index out of range: " + at() + " is leaf " + std::to_string(leaf) + " of " +
+                                       std::to_string(leaves));
+                        if (reached_[leaf]++) return set(at() + ": leaf " + std::to_string(leaf) + " reached twice");
+                    } else {
+                        if (c <= i || c >= nodes)
+                            return set("index out of range: " + at() + " is node " + std::to_string(c) + " (after " +
+                                       std::to_string(i) + ", before " + std::to_string(nodes) + ")");
+                        if (level_[c]) return set(at() + ": node " + std::to_string(c) + " reached twice");
+                        if (level_[i] >= depth_)
+                            return set(at() + ": deeper than the depth of " + std::to_string(depth_));
+                        level_[c] = std::uint8_t(level_[i] + 1);
+                    }
                 }
             }
         }
-        if (deepest != depth) return "depth " + std::to_string(deepest) + ", its header says " + std::to_string(depth);
-        for (std::size_t l = 0; l < leaves; ++l)
-            if (!reached[l]) return "index out of range: leaf " + std::to_string(l) + " is not reached from the root";
-        const Box<T> root = tree.bounds();
-        if (T(std::max(max_abs(root.lo), max_abs(root.hi))) != tree.bound_ && root.lo.x <= root.hi.x)
-            return "its bound is not its root's";
-        const std::size_t primitives = tree.primitives_.size();
-        for (std::size_t l = 0; l < leaves; ++l) {
-            const Leaf& leaf = tree.leaves_[l];
-            if (leaf.count < 1 || leaf.count > 8 || leaf.first > primitives || primitives - leaf.first < leaf.count)
-                return "index out of range: leaf " + std::to_string(l) + " holds primitives [" +
-                       std::to_string(leaf.first) + ", +" + std::to_string(leaf.count) + ") of " +
-                       std::to_string(primitives);
-            const Block& b = bvh.blocks_[l];
-            const std::uint32_t* own = &tree.primitives_[leaf.first];
-            for (std::uint32_t k = 0; k < 8; ++k) {
-                const bool padding = k >= leaf.count;
-                bool same = b.primitive[k] == own[padding ? 0 : k];
-                for (std::uint32_t j = 0; j < k && !padding; ++j) same &= b.primitive[j] != b.primitive[k];
-                for (int v = 0; v < 3 && padding; ++v)
-                    for (int a = 0; a < 3; ++a) same &= std::memcmp(&b.v[v][a][k], &b.v[v][a][0], sizeof(T)) == 0;
-                if (!same) return "block " + std::to_string(l) + " lane " + std::to_string(k) + " is not its leaf's";
+
+        // Checks leaves and blocks [begin, end), after every node, leaf and primitive is read.
+        void blocks(std::size_t begin, std::size_t end) {
+            const Tree& tree = bvh_.tree_;
+            const std::size_t primitives = tree.primitives_.size();
+            for (std::size_t l = begin; l < end && wrong_.empty(); ++l) {
+                if (!reached_[l])
+                    return set("index out of range: leaf " + std::to_string(l) + " is not reached from the root");
+                const Leaf& leaf = tree.leaves_[l];
+                if (leaf.count < 1 || leaf.count > 8 || leaf.first > primitives || primitives - leaf.first < leaf.count)
+                    return set("index out of range: leaf " + std::to_string(l) + " holds primitives [" +
+                               std::to_string(leaf.first) + ", +" + std::to_string(leaf.count) + ") of " +
+                               std::to_string(primitives));
+                if (!holds(bvh_.blocks_[l], &tree.primitives_[leaf.first], leaf.count))
+                    return set("block " + std::to_string(l) + " is not its leaf's (its primitives or padding differ)");
             }
         }
-        return "";
-    }
+
+        // The first reason found, or the checks that need the whole tree.
+        [[nodiscard]] std::string finish() const {
+            if (!wrong_.empty() || level_.empty()) return wrong_;
+            if (deepest_ != depth_)
+                return "depth " + std::to_string(deepest_) + ", its header says " + std::to_string(depth_);
+            const Tree& tree = bvh_.tree_;
+            const Box<T> root = tree.bounds();
+            if (T(std::max(max_abs(root.lo), max_abs(root.hi))) != tree.bound_ && root.lo.x <= root.hi.x)
+                return "its bound is not its root's";
+            return "";
+        }
+
+    private:
+        void set(std::string why) { wrong_ = std::move(why); }
+
+        // Whether block b holds the `count` primitives at `own`, pairwise distinct, in its first
+        // lanes, and its other lanes repeat lane 0 bit for bit (branch-free: it runs on every block).
+        [[nodiscard]] static bool holds(const Block& b, const std::uint32_t* own, std::uint32_t count) noexcept {
+            using Bits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
+            // Masks of lanes: those before the padding, and those whose primitive is lane 0's.
+            const unsigned live = (1u << count) - 1u;
+            unsigned first = 0, wrong = 0;
+            for (std::uint32_t k = 0; k < 8; ++k) first |= unsigned(b.primitive[k] == b.primitive[0]) << k;
+            wrong |= unsigned((first & live) != 1u) | unsigned((first | live) != 0xffu);
+            for (std::uint32_t k = 0; k < count; ++k) wrong |= unsigned(b.primitive[k] != own[k]);
+            for (std::uint32_t k = 2; k < count; ++k)
+                for (std::uint32_t j = 1; j < k; ++j) wrong |= unsigned(b.primitive[j] == b.primitive[k]);
+            const auto bits = [&b](int r, std::uint32_t k) {
+                Bits x;
+                std::memcpy(&x, &b.v[r / 3][r % 3][k], sizeof x);
+                return x;
+            };
+            for (std::uint32_t k = count; k < 8; ++k)
+                for (int r = 0; r < 9; ++r) wrong |= unsigned(bits(r, k) != bits(r, 0));
+            return wrong == 0;
+        }
+
+        const Bvh<T>& bvh_;
+        std::vector<std::uint8_t> level_, reached_;
+        std::uint32_t depth_, deepest_ = 0;
+        std::string wrong_;
+    };
 
     // Whether child slot k of n has the empty box the build gives an empty slot (lo = +∞, hi = −∞).
     [[nodiscard]] static bool empty_box(const Node& n, int k) noexcept {
