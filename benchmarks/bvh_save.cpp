@@ -1,6 +1,6 @@
 // Saving and loading a Bvh (bvh/serialize.hpp) against building it: for each mesh and precision,
 // medians over --runs runs of
-//   build       isin::Bvh<T>(triangles) on all threads (wall and process CPU time)
+//   build       isin::Bvh<T>(triangles) on 1 thread and on 2 threads (wall and process CPU time)
 //   save        bvh.save(path) (wall: encode, write, fsync, rename)
 //   load        Bvh<T>::load(path), the file in the page cache (wall and CPU: read, checksum, checks)
 //   memory      Bvh<T>::load_from_memory from a buffer holding the file (wall and CPU)
@@ -91,12 +91,13 @@ std::size_t differing_rays(const isin::Bvh<T>& a, const isin::Bvh<T>& b, std::si
 template <class T>
 void measure(const std::string& name, const std::vector<isin::Triangle<T>>& tris, int runs, const std::string& dir) {
     const std::string path = dir + "/bvh_save_" + (sizeof(T) == 4 ? "float" : "double") + ".bvh";
-    Timing build, save, load, memory;
+    Timing build1, build, save, load, memory;
     std::size_t file_bytes = 0, held = 0, differ = 0, hits = 0;
     for (int run = 0; run < runs; ++run) {
         std::vector<isin::Bvh<T>> built;
         built.reserve(1);
-        timed(build, [&] { built.emplace_back(tris); });
+        timed(build1, [&] { isin::Bvh<T> one(tris, isin::BvhOptions{1}); });
+        timed(build, [&] { built.emplace_back(tris, isin::BvhOptions{2}); });
         const isin::Bvh<T>& bvh = built[0];
         timed(save, [&] { bvh.save(path); });
         std::vector<isin::Bvh<T>> loaded;
@@ -112,15 +113,15 @@ void measure(const std::string& name, const std::vector<isin::Triangle<T>>& tris
         }
     }
     std::filesystem::remove(path);
-    const double b_wall = median(build.wall), b_cpu = median(build.cpu);
+    const double b1_cpu = median(build1.cpu), b_wall = median(build.wall), b_cpu = median(build.cpu);
     const double l_wall = median(load.wall), l_cpu = median(load.cpu);
-    std::printf("%-16s %-6s %9zu  build %7.1f ms (cpu %7.1f)  save %6.1f ms  load %6.1f ms (cpu %6.1f) = %.3fx "
-                "build cpu, %.3fx wall  from memory %6.1f ms (cpu %6.1f)  file %6.1f MB = %.3fx memory %6.1f MB  "
-                "rays %s (%zu hits)\n",
-                name.c_str(), sizeof(T) == 4 ? "float" : "double", tris.size(), b_wall, b_cpu, median(save.wall),
-                l_wall, l_cpu, l_cpu / b_cpu, l_wall / b_wall, median(memory.wall), median(memory.cpu),
-                double(file_bytes) / 1e6, double(file_bytes) / double(held), double(held) / 1e6,
-                differ ? (std::to_string(differ) + " differ").c_str() : "same", hits);
+    std::printf("%-16s %-6s %9zu  build 1 thread %7.1f ms (cpu %7.1f), 2 threads %7.1f ms (cpu %7.1f)  save %6.1f ms  "
+                "load %6.1f ms (cpu %6.1f) = %.3fx build cpu 1 thread, %.3fx 2 threads, %.3fx wall 2 threads  "
+                "from memory %6.1f ms (cpu %6.1f)  file %6.1f MB = %.3fx memory %6.1f MB  rays %s (%zu hits)\n",
+                name.c_str(), sizeof(T) == 4 ? "float" : "double", tris.size(), median(build1.wall), b1_cpu, b_wall,
+                b_cpu, median(save.wall), l_wall, l_cpu, l_cpu / b1_cpu, l_cpu / b_cpu, l_wall / b_wall,
+                median(memory.wall), median(memory.cpu), double(file_bytes) / 1e6, double(file_bytes) / double(held),
+                double(held) / 1e6, differ ? (std::to_string(differ) + " differ").c_str() : "same", hits);
     std::fflush(stdout);
 }
 

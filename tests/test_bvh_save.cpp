@@ -396,6 +396,65 @@ TEST_CASE_TEMPLATE("a Bvh file whose tree is wrong but sealed is refused: every 
     CHECK(contains(refusal<T>(b), "reached twice"));
 }
 
+TEST_CASE_TEMPLATE("a sealed Bvh file whose leaf blocks are not their leaves' is refused, in every piece read", T,
+                   float, double) {
+    const Bytes file = encode(isin::Bvh<T>(soup_with_gaps<T>(3000, 11))); // leaf blocks in several pieces
+    const std::uint64_t nodes = get64(file, 32), leaves = get64(file, 40), primitives = get64(file, 48);
+    const std::size_t leaves_at = 88 + std::size_t(nodes) * (48 * sizeof(T) + 32);
+    const std::size_t primitives_at = leaves_at + std::size_t(leaves) * 8;
+    const std::size_t blocks_at = primitives_at + std::size_t(primitives) * 4, block_bytes = 72 * sizeof(T) + 32;
+    REQUIRE(leaves * block_bytes > (std::size_t(1) << 17));
+    REQUIRE(refusal<T>(file).empty());
+    const auto lane_at = [&](std::size_t leaf, std::size_t k) {
+        return blocks_at + leaf * block_bytes + 72 * sizeof(T) + 4 * k;
+    };
+    std::size_t padded = 0, checked = 0;
+    for (std::size_t leaf = 0; leaf < leaves; leaf += 37) {
+        const std::uint32_t first = std::uint32_t(get64(file, leaves_at + 8 * leaf)),
+                            count = std::uint32_t(get64(file, leaves_at + 8 * leaf + 4));
+        const auto primitive = [&](std::size_t k) { return std::uint32_t(get64(file, lane_at(leaf, k))); };
+        const auto refused = [&](Bytes b) {
+            reseal(b);
+            return contains(refusal<T>(b), "block " + std::to_string(leaf) + " is not its leaf's");
+        };
+        Bytes b = file;
+        put32(b, lane_at(leaf, count - 1), primitive(count - 1) + 1); // a lane not its leaf's primitive
+        CHECK(refused(b));
+        if (count >= 2) { // a live lane that repeats lane 0 (taken for padding), in the block and the leaf
+            b = file;
+            put32(b, lane_at(leaf, 1), primitive(0));
+            put32(b, primitives_at + 4 * (std::size_t(first) + 1), primitive(0));
+            CHECK(refused(b));
+        }
+        if (count >= 3) { // two live lanes alike
+            b = file;
+            put32(b, lane_at(leaf, 2), primitive(1));
+            put32(b, primitives_at + 4 * (std::size_t(first) + 2), primitive(1));
+            CHECK(refused(b));
+        }
+        if (count < 8) { // padding that is not lane 0: its primitive, then each of its reals by one bit
+            ++padded;
+            b = file;
+            put32(b, lane_at(leaf, 7), primitive(0) + 1);
+            CHECK(refused(b));
+            for (std::size_t r = 0; r < 9; ++r) {
+                b = file;
+                b[blocks_at + leaf * block_bytes + (r * 8 + 7) * sizeof(T)] ^= 1;
+                CHECK(refused(b));
+            }
+        }
+        ++checked;
+    }
+    CHECK(checked > 10);
+    CHECK(padded > 0);
+    // A damaged file is called damaged, even when what it holds is also wrong.
+    Bytes b = file;
+    put32(b, lane_at(std::size_t(leaves) - 1, 0), 123456);
+    reseal(b);
+    b[100] ^= 4;
+    CHECK(contains(refusal<T>(b), "checksum mismatch"));
+}
+
 TEST_CASE_TEMPLATE("Bvh files: empty, a directory, missing, too large, unwritable", T, float, double) {
     const TempDir dir("isin-bvh-save-");
     const auto message = [](const std::string& path, isin::ReadLimits limits = {}) {

@@ -302,17 +302,15 @@ public:
                 i = end;
             }
         };
-        // Records of `bytes` each through a buffer of one piece, into `records` (padded structs).
+        // Records of `bytes` each through a buffer of one piece, each handed to store(record, index).
         std::vector<unsigned char> buffer;
-        const auto read_padded = [&](auto* records, std::size_t count, std::size_t bytes, std::size_t reals,
-                                     auto&& check) {
+        const auto read_padded = [&](std::size_t count, std::size_t bytes, auto&& store, auto&& check) {
             buffer.resize(std::min(count, piece(bytes)) * bytes);
             for (std::size_t i = 0; i < count;) {
                 const std::size_t end = std::min(count, i + piece(bytes)), first = i;
                 read(buffer.data(), (end - i) * bytes);
                 sum.update(buffer.data(), (end - i) * bytes);
-                for (const unsigned char* p = buffer.data(); i < end; ++i, p += bytes)
-                    get_record(&records[i], p, bytes, reals);
+                for (const unsigned char* p = buffer.data(); i < end; ++i, p += bytes) store(p, i);
                 check(first, end);
             }
         };
@@ -322,8 +320,13 @@ public:
         detail::reserve_huge_pages(tree.nodes_, std::size_t(nodes));
         detail::reserve_huge_pages(tree.leaves_, std::size_t(leaves));
         detail::reserve_huge_pages(tree.primitives_, std::size_t(primitives));
-        tree.nodes_.resize(std::size_t(nodes));
-        read_padded(tree.nodes_.data(), std::size_t(nodes), node_bytes, 48,
+        // Nodes appended one by one: resize would first zero the whole array, a second pass.
+        const auto append_node = [&](const unsigned char* p, std::size_t) {
+            Node n;
+            get_record(&n, p, node_bytes, 48);
+            tree.nodes_.push_back(n);
+        };
+        read_padded(std::size_t(nodes), node_bytes, append_node,
                     [&](std::size_t i, std::size_t end) { checker.nodes(i, end); });
         tree.leaves_.resize(std::size_t(leaves));
         read_straight(tree.leaves_.data(), std::size_t(leaves), leaf_bytes, 4, nothing);
@@ -334,7 +337,10 @@ public:
         if (sizeof(Block) == block_bytes && !swap)
             read_straight(blocks.data(), std::size_t(leaves), block_bytes, 1, check_blocks);
         else
-            read_padded(blocks.data(), std::size_t(leaves), block_bytes, 72, check_blocks);
+            read_padded(
+                std::size_t(leaves), block_bytes,
+                [&](const unsigned char* p, std::size_t i) { get_record(&blocks[i], p, block_bytes, 72); },
+                check_blocks);
         unsigned char stored[checksum_bytes];
         read(stored, checksum_bytes);
         if (sum.digest() != get64(stored)) throw fail("checksum mismatch (a damaged file)");
