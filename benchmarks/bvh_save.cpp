@@ -10,6 +10,7 @@
 // Meshes: the 1.3M icosphere of meshes.hpp, and every PLY or OBJ path given (the dragon:
 // bash scripts/dragon.sh fetches it into build/load_models/dragon_le.ply).
 // Run: taskset -c 0,1 build/…/benchmarks/bvh_save [--runs N] [--dir DIR] [--double] [PATH…]
+#include <sys/resource.h>
 #include <time.h>
 
 #include <algorithm>
@@ -47,21 +48,29 @@ double median(std::vector<double> v) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// Minor page faults of the process so far (first touches of fresh pages).
+double page_faults() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_minflt);
+}
+
 struct Timing {
-    std::vector<double> wall, cpu;
-    void add(Clock::time_point start, double cpu_start) {
+    std::vector<double> wall, cpu, faults;
+    void add(Clock::time_point start, double cpu_start, double faults_start) {
         wall.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
         cpu.push_back(1e3 * (cpu_seconds() - cpu_start));
+        faults.push_back(page_faults() - faults_start);
     }
 };
 
 // Times f() once into t.
 template <class F>
 void timed(Timing& t, F&& f) {
-    const double c = cpu_seconds();
+    const double c = cpu_seconds(), faults = page_faults();
     const auto start = Clock::now();
     f();
-    t.add(start, c);
+    t.add(start, c, faults);
 }
 
 // Rays through the mesh's box from around it: how many of them two Bvhs answer differently.
@@ -116,12 +125,14 @@ void measure(const std::string& name, const std::vector<isin::Triangle<T>>& tris
     const double b1_cpu = median(build1.cpu), b_wall = median(build.wall), b_cpu = median(build.cpu);
     const double l_wall = median(load.wall), l_cpu = median(load.cpu);
     std::printf("%-16s %-6s %9zu  build 1 thread %7.1f ms (cpu %7.1f), 2 threads %7.1f ms (cpu %7.1f)  save %6.1f ms  "
-                "load %6.1f ms (cpu %6.1f) = %.3fx build cpu 1 thread, %.3fx 2 threads, %.3fx wall 2 threads  "
+                "load %6.1f ms (cpu %6.1f, %.0f page faults) = %.3fx build cpu 1 thread, %.3fx 2 threads, %.3fx wall 2 "
+                "threads  "
                 "from memory %6.1f ms (cpu %6.1f)  file %6.1f MB = %.3fx memory %6.1f MB  rays %s (%zu hits)\n",
                 name.c_str(), sizeof(T) == 4 ? "float" : "double", tris.size(), median(build1.wall), b1_cpu, b_wall,
-                b_cpu, median(save.wall), l_wall, l_cpu, l_cpu / b1_cpu, l_cpu / b_cpu, l_wall / b_wall,
-                median(memory.wall), median(memory.cpu), double(file_bytes) / 1e6, double(file_bytes) / double(held),
-                double(held) / 1e6, differ ? (std::to_string(differ) + " differ").c_str() : "same", hits);
+                b_cpu, median(save.wall), l_wall, l_cpu, median(load.faults), l_cpu / b1_cpu, l_cpu / b_cpu,
+                l_wall / b_wall, median(memory.wall), median(memory.cpu), double(file_bytes) / 1e6,
+                double(file_bytes) / double(held), double(held) / 1e6,
+                differ ? (std::to_string(differ) + " differ").c_str() : "same", hits);
     std::fflush(stdout);
 }
 
