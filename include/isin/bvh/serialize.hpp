@@ -4,8 +4,9 @@
 /// (nodes, leaves, primitive order, leaf blocks) as little-endian arrays in the one layout every
 /// code path reads (8-wide nodes, 8-lane blocks), after a header and its own checksum, and ends
 /// with an XXH64 checksum of every byte before it. Loading trusts nothing: sizes are checked
-/// against the file's length before anything is allocated, the checksum before anything is
-/// used, and every index, count and reference of the tree before the Bvh is returned.
+/// against the file's length before anything is allocated, and the checksum and every index,
+/// count and reference of the tree (each checked in bounds as it is read) before the Bvh is
+/// returned.
 ///
 ///     isin::Bvh<float> bvh{mesh};
 ///     bvh.save("model.bvh");                                   // once
@@ -219,7 +220,7 @@ public:
 
     /// The Bvh in the `size` bytes `source` holds (MemorySource, FileSource), a file named `name`
     /// in messages; throws BvhFileError. The file's parts are read straight into the Bvh's arrays
-    /// (records with padding through a small buffer), each piece summed while it is in cache.
+    /// (padded records through a buffer of one piece), each piece summed and checked in cache.
     template <class Source>
     [[nodiscard]] static Bvh<T> decode(Source& source, std::uint64_t size, const std::string& name,
                                        const ReadLimits& limits) {
