@@ -186,10 +186,9 @@ ISIN_DETAIL_INLINE unsigned hit_children(const typename BvhTree<T>::Node& n, con
 // One ray's walk through the tree a step at a time: a step tests a node's children and pushes
 // them, or calls a leaf; then, when that gives no next node, pops the next entry entered before
 // t_max. walk runs one walker to its end; traverse_pair interleaves two.
-// The ray's slab terms are held as `Slab`: a copy by default (walk: then the compiler knows that
-// no store of the walk changes them and keeps them in registers), a reference for
-// traverse_pair (whose two walkers in one loop are faster so).
-template <Visit visit, bool robust, class T, class Leaf, class Slab = const SlabRay<T>>
+// The ray's slab terms are read through a reference: each node's test then broadcasts them from
+// memory (a load µop), where a copy held in registers is broadcast by a shuffle µop per term.
+template <Visit visit, bool robust, class T, class Leaf>
 struct Walker {
     using Node = typename BvhTree<T>::Node;
     static constexpr std::uint32_t leaf_bit = BvhTree<T>::leaf_bit;
@@ -198,7 +197,7 @@ struct Walker {
         T t;
     };
     const Node* nodes;
-    Slab r;
+    const SlabRay<T>& r;
     T& t_max;
     Leaf& leaf;
     std::uint32_t ref;                            // the node or leaf being visited
@@ -302,9 +301,8 @@ unsigned walk_pair(const BvhTree<T>& tree, const SlabRay<T>& a, T& t_a, LeafA& l
                    LeafB& leaf_b) {
     const bool go_a = a.ok && t_a > T(0), go_b = b.ok && t_b > T(0);
     if (go_a && go_b && !a.robust && !b.robust) {
-        using Slab = const SlabRay<T>&;
-        Walker<visit, false, T, LeafA, Slab> wa(tree, a, t_a, leaf_a, 0);
-        Walker<visit, false, T, LeafB, Slab> wb(tree, b, t_b, leaf_b, 0);
+        Walker<visit, false, T, LeafA> wa(tree, a, t_a, leaf_a, 0);
+        Walker<visit, false, T, LeafB> wb(tree, b, t_b, leaf_b, 0);
         bool on_a = true, on_b = true;
         while (on_a && on_b) on_a = wa.step(), on_b = wb.step();
         while (on_a) on_a = wa.step();
