@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "../detail/parallel.hpp"
 #include "../point_hit.hpp"
@@ -42,16 +43,15 @@ ISIN_DETAIL_INLINE void triangle_box_distances(const TriangleBlock<T>& b, const 
         }
 }
 
-/// The closest point of the tree's triangles to p within max_distance (PointHit; a miss when
-/// none, or for a NaN or infinite p). Of triangles at the same distance, the lowest index.
+/// closest_point (below) with the sphere's squared radius starting at `start2` (max_distance²,
+/// or less: a bound known to hold the answer).
 template <class T>
-[[nodiscard]] PointHit<T> closest_point(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks, const Vertex<T>& p,
-                                        T max_distance) noexcept {
+[[nodiscard]] PointHit<T> closest_point_within(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks,
+                                               const Vertex<T>& p, T start2) noexcept {
     PointHit<T> best;
-    if (tree.empty() || !is_finite(p) || !(max_distance >= T(0))) return best;
     using Tree = BvhTree<T>;
     const T q[3] = {p.x, p.y, p.z};
-    T best2 = max_distance * max_distance; // the sphere's squared radius; +∞ for no bound
+    T best2 = start2; // the sphere's squared radius; +∞ for no bound
     TrianglePoint<T> found{};
     std::uint32_t found_primitive = PointHit<T>::none;
     std::uint32_t found_leaf = 0;
@@ -98,7 +98,7 @@ template <class T>
             }
         }
     }
-    if (found_lane < 0) return best;
+    if (found_lane < 0) return best; // nothing within the start radius
     const typename TriangleBlocks<T>::Block& b = blocks[found_leaf];
     const int k = found_lane;
     const Triangle<T> tri{{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]},
@@ -111,14 +111,73 @@ template <class T>
     return best;
 }
 
+/// The closest point of the tree's triangles to p within max_distance (PointHit; a miss when
+/// none, or for a NaN or infinite p). Of triangles at the same distance, the lowest index.
+template <class T>
+[[nodiscard]] PointHit<T> closest_point(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks, const Vertex<T>& p,
+                                        T max_distance) noexcept {
+    if (tree.empty() || !is_finite(p) || !(max_distance >= T(0))) return PointHit<T>{};
+    return closest_point_within(tree, blocks, p, max_distance * max_distance);
+}
+
+/// The position of p along a Morton (Z-order) curve through `box`, 10 bits an axis; NaN and
+/// points outside the box clamp to its faces.
+template <class T>
+[[nodiscard]] inline std::uint32_t morton_code(const Vertex<T>& p, const Box<T>& box) noexcept {
+    std::uint32_t code = 0;
+    const T c[3] = {p.x, p.y, p.z}, lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
+    for (int a = 0; a < 3; ++a) {
+        const T x = hi[a] > lo[a] ? (c[a] - lo[a]) / (hi[a] - lo[a]) * T(1023) : T(0);
+        auto cell = static_cast<std::uint32_t>(x >= T(0) ? std::min(x, T(1023)) : T(0)); // NaN: 0
+        cell = (cell | (cell << 16)) & 0x030000ffu;                                      // spread the 10 bits two apart
+        cell = (cell | (cell << 8)) & 0x0300f00fu;
+        cell = (cell | (cell << 4)) & 0x030c30c3u;
+        cell = (cell | (cell << 2)) & 0x09249249u;
+        code |= cell << a;
+    }
+    return code;
+}
+
 /// closest_point for points[0, count) into out[0, count), on up to `threads` threads (0 = every
-/// core); chunks of 256 points, the same answers as one by one.
+/// core), the same answers as one by one. The points are taken in Morton order, and each
+/// query's sphere starts at the distance from its point to the previous point's answer (which
+/// bounds its own), a little enlarged for rounding; when that finds nothing, the query is
+/// repeated without the bound, so no answer depends on the order.
 template <class T>
 void closest_points(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks, const Vertex<T>* points, std::size_t count,
                     PointHit<T>* out, int threads) {
+    const T inf = std::numeric_limits<T>::infinity();
+    Box<T> box;
+    for (std::size_t i = 0; i < count; ++i)
+        if (is_finite(points[i])) box.grow(points[i]);
+    std::vector<std::uint64_t> order(count); // Morton code << 32 | index (count < 2³² points a sort)
+    const bool sortable = count <= std::size_t(0xffffffffu);
+    for (std::size_t i = 0; i < count; ++i)
+        order[i] = sortable ? std::uint64_t(morton_code(points[i], box)) << 32 | i : i;
+    if (sortable) std::sort(order.begin(), order.end());
     parallel_chunks(count, thread_count(threads), 256, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i)
-            out[i] = closest_point(tree, blocks, points[i], std::numeric_limits<T>::infinity());
+        const PointHit<T>* previous = nullptr;
+        for (std::size_t j = begin; j < end; ++j) {
+            const std::size_t i = sortable ? std::size_t(order[j] & 0xffffffffu) : j;
+            const Vertex<T>& p = points[i];
+            if (tree.empty() || !is_finite(p)) {
+                out[i] = PointHit<T>{};
+                continue;
+            }
+            T start2 = inf;
+            if (previous != nullptr && *previous) {
+                // |p − q| bounds p's distance; q (the neighbour's answer) is rounded to T, and the
+                // walk's own distances carry rounding too: 1e-3 relative and a few ulps of the
+                // coordinates keep the answer inside.
+                const Vertex<T> q = previous->point;
+                const T slack = T(64) * std::numeric_limits<T>::epsilon() * (max_abs(p) + max_abs(q));
+                const T d = length(p - q) * T(1.001) + slack;
+                start2 = d * d;
+            }
+            out[i] = closest_point_within(tree, blocks, p, start2);
+            if (!out[i] && start2 < inf) out[i] = closest_point_within(tree, blocks, p, inf);
+            previous = &out[i];
+        }
     });
 }
 
