@@ -11,6 +11,7 @@
 
 #include "../detail/parallel.hpp"
 #include "../point_hit.hpp"
+#include "query_lanes.hpp"
 #include "tree.hpp"
 #include "triangles.hpp"
 
@@ -41,6 +42,33 @@ ISIN_DETAIL_INLINE void triangle_box_distances(const TriangleBlock<T>& b, const 
             const T gap = std::max(std::max(lo - p[a], p[a] - hi), T(0));
             d2[k] += gap * gap;
         }
+}
+
+/// Lower bounds of the squared distances from p to a block's 8 triangles (all lanes, padding
+/// too): the larger of the distance to each triangle's box and to its plane, |(p − V0)·N|/|N|,
+/// the latter less a bound on its rounding error and on that of the exact test, so that it
+/// never exceeds the distance closest_on_triangle computes. Overflow and NaN leave the box's.
+template <class T>
+ISIN_DETAIL_INLINE void triangle_lower_bounds(const TriangleBlock<T>& b, const T (&p)[3], T (&d2)[8]) noexcept {
+    triangle_box_distances(b, p, d2);
+    T s[8], nn[8], scale2[8], scale[8];
+    for (int k = 0; k < 8; ++k) {
+        const T ex = b.v[1][0][k] - b.v[0][0][k], ey = b.v[1][1][k] - b.v[0][1][k], ez = b.v[1][2][k] - b.v[0][2][k];
+        const T fx = b.v[2][0][k] - b.v[0][0][k], fy = b.v[2][1][k] - b.v[0][1][k], fz = b.v[2][2][k] - b.v[0][2][k];
+        const T ax = p[0] - b.v[0][0][k], ay = p[1] - b.v[0][1][k], az = p[2] - b.v[0][2][k];
+        const T nx = ey * fz - ez * fy, ny = ez * fx - ex * fz, nz = ex * fy - ey * fx; // §2: N = (V1−V0) × (V2−V0)
+        s[k] = ax * nx + ay * ny + az * nz;                                             // (p − V0)·N
+        nn[k] = nx * nx + ny * ny + nz * nz;
+        const T e2 = ex * ex + ey * ey + ez * ez, f2 = fx * fx + fy * fy + fz * fz;
+        scale2[k] = (ax * ax + ay * ay + az * az + e2 + f2) * e2 * f2; // ≥ ((|p − V0| + |E|+|F|)·|E||F|)²/3
+    }
+    sqrt8(scale2, scale);
+    const T eps = std::numeric_limits<T>::epsilon();
+    for (int k = 0; k < 8; ++k) {
+        const T t = std::max(std::fabs(s[k]) - T(32) * eps * scale[k], T(0));
+        const T plane2 = nn[k] > T(0) ? t * t / nn[k] * (T(1) - T(16) * eps) : T(0);
+        d2[k] = std::max(d2[k], plane2); // a NaN plane2 leaves the box's
+    }
 }
 
 /// closest_point (below) with the sphere's squared radius starting at `start2` (max_distance²,
@@ -84,8 +112,8 @@ template <class T>
         }
         const std::uint32_t leaf = e.ref & ~Tree::leaf_bit;
         const typename TriangleBlocks<T>::Block& b = blocks[leaf];
-        T box2[8]; // squared distances to the 8 triangles' boxes: the exact test only where they are in reach
-        triangle_box_distances(b, q, box2);
+        T box2[8]; // lower bounds of the 8 triangles' squared distances: the exact test only where they are in reach
+        triangle_lower_bounds(b, q, box2);
         for (int k = 0, live = live_lanes(b); k < live; ++k) {
             if (!(box2[k] <= best2)) continue;
             const Vertex<T> v0{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]};
