@@ -159,8 +159,10 @@ void closest_points(const std::string& name, const std::vector<isin::Triangle<fl
 }
 
 // Inside/outside methods: each one's wrong answers against `truth` and its time per point (the
-// median over `runs` runs, each run timing every method once, in turn, so that a change of load
-// falls on all of them), and in each run its throughput over the first method's (one-ray parity).
+// median over `runs` runs; each run takes the points in chunks of `chunk` and times every method
+// on each chunk in turn, so that a change of load on the shared machine falls on all of them),
+// and in each run its throughput over the first method's (one-ray parity).
+constexpr std::size_t chunk = 100;
 struct InsideMethod {
     std::string name;
     std::function<bool(const isin::Vertex<float>&)> f;
@@ -169,14 +171,18 @@ void inside_methods(const std::string& mesh, const std::vector<InsideMethod>& me
                     const std::vector<isin::Vertex<float>>& points, const std::vector<bool>& truth, int runs) {
     std::vector<std::vector<double>> seconds(methods.size());
     std::vector<std::size_t> wrong(methods.size());
-    for (int r = 0; r < runs; ++r)
-        for (std::size_t m = 0; m < methods.size(); ++m) {
-            std::size_t w = 0;
-            const auto t0 = Clock::now();
-            for (std::size_t i = 0; i < points.size(); ++i) w += methods[m].f(points[i]) != truth[i];
-            seconds[m].push_back(std::chrono::duration<double>(Clock::now() - t0).count());
-            wrong[m] = w;
-        }
+    for (int r = 0; r < runs; ++r) {
+        for (std::size_t m = 0; m < methods.size(); ++m) seconds[m].push_back(0), wrong[m] = 0;
+        for (std::size_t begin = 0; begin < points.size(); begin += chunk)
+            for (std::size_t m = 0; m < methods.size(); ++m) {
+                const std::size_t end = std::min(points.size(), begin + chunk);
+                std::size_t w = 0;
+                const auto t0 = Clock::now();
+                for (std::size_t i = begin; i < end; ++i) w += methods[m].f(points[i]) != truth[i];
+                seconds[m].back() += std::chrono::duration<double>(Clock::now() - t0).count();
+                wrong[m] += w;
+            }
+    }
     for (std::size_t m = 0; m < methods.size(); ++m) {
         std::string ratios;
         for (std::size_t r = 0; r < seconds[m].size(); ++r)
@@ -238,7 +244,7 @@ void inside_outside(const std::string& name, const isin::Mesh<float>& mesh, cons
 }
 
 // contains (beta = 2) against one-ray parity on a mesh whose truth is not known (a scan):
-// time per point only, the two timed one after the other in each run; points of the enlarged
+// time per point only, the two timed in turn on each chunk of points; points of the enlarged
 // box at least 1e-3 of the diagonal from the surface.
 void inside_timing(const std::string& name, const isin::Mesh<float>& mesh, int n, int runs) {
     const isin::Solid<float> solid{mesh};
@@ -255,12 +261,16 @@ void inside_timing(const std::string& name, const isin::Mesh<float>& mesh, int n
     std::size_t odd = 0, in = 0;
     for (int r = 0; r < runs; ++r) {
         odd = 0, in = 0;
-        auto t0 = Clock::now();
-        for (const auto& p : points) odd += bvh.count_hits({p, {0.57f, -0.22f, 0.79f}}) % 2;
-        parity.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
-        t0 = Clock::now();
-        for (const auto& p : points) in += solid.contains(p);
-        contains.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+        parity.push_back(0), contains.push_back(0);
+        for (std::size_t begin = 0; begin < points.size(); begin += chunk) {
+            const std::size_t end = std::min(points.size(), begin + chunk);
+            auto t0 = Clock::now();
+            for (std::size_t i = begin; i < end; ++i) odd += bvh.count_hits({points[i], {0.57f, -0.22f, 0.79f}}) % 2;
+            parity.back() += std::chrono::duration<double>(Clock::now() - t0).count();
+            t0 = Clock::now();
+            for (std::size_t i = begin; i < end; ++i) in += solid.contains(points[i]);
+            contains.back() += std::chrono::duration<double>(Clock::now() - t0).count();
+        }
     }
     const double np = double(points.size()) * 1e-9;
     std::string ratios;
