@@ -364,6 +364,13 @@ TEST_CASE_TEMPLATE("Jacobson 2013: overlapping spheres count 2, holes about 1/2,
     const isin::Solid<T> cup{half};
     CHECK(cup.winding_number_exact({0, 0, 0}) == doctest::Approx(0.5).epsilon(0.02));
 
+    // A soup of the same triangles (no shared vertices) has the same winding numbers.
+    const isin::Solid<T> soup{isin::Mesh<T>::from_triangles(triangles_of(solids::merged(a, b)))};
+    for (const isin::Vertex<T> p : {isin::Vertex<T>{T(0.4), 0, 0}, isin::Vertex<T>{T(-0.5), T(0.1), 0},
+                                    isin::Vertex<T>{T(2.5), 0, 0}, isin::Vertex<T>{T(0.3), T(0.95), T(0.2)}}) {
+        CHECK(soup.contains(p) == both.contains(p));
+        CHECK(soup.winding_number(p) == doctest::Approx(double(both.winding_number_exact(p))).epsilon(0.02));
+    }
     const T nan = std::numeric_limits<T>::quiet_NaN();
     // beta: NaN and +inf sum every triangle exactly; below 1 it counts as 1 (p outside the ball).
     for (const isin::Vertex<T> p : {isin::Vertex<T>{T(0.4), 0, 0}, isin::Vertex<T>{T(1.5), T(0.2), 0}}) {

@@ -6,8 +6,8 @@
 /// out), and a smooth, meaningful value on meshes with holes, overlaps and self-intersections
 /// (2 where two closed parts overlap; about 1/2 at a hole). Made fast by the far-field
 /// expansion of Barill, Dickson, Schmidt, Levin & Jacobson, "Fast Winding Numbers for Soups and
-/// Clouds" (2018): a cluster of triangles seen from farther than beta times its radius counts
-/// as one dipole.
+/// Clouds" (2018) over the nodes of the Solid's Bvh: a node's child (or a leaf's triangle) seen
+/// from farther than beta times its radius counts as one dipole, 8 children in lanes.
 ///
 ///     isin::Solid<float> solid{mesh};
 ///     if (solid.contains(p)) ...;            // winding number ≥ 1/2
