@@ -83,10 +83,12 @@ public:
         const T d = bvh_.closest_point(p).distance;
         return contains(p) ? -d : d;
     }
-    /// out[i] = contains(p[i]) (1 or 0) for i < n, on up to `threads` threads (0 = every core).
+    /// out[i] = contains(p[i]) (1 or 0) for i < n, on up to `threads` threads (0 = every core);
+    /// the points are taken in Morton order, so that neighbours share the nodes they visit.
     void contains(const Vertex<T>* p, std::size_t n, std::uint8_t* out, int threads = 0) const {
+        const std::vector<std::size_t> order = detail::morton_order(p, n);
         detail::parallel_chunks(n, detail::thread_count(threads), 256, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t i = begin; i < end; ++i) out[i] = contains(p[i]) ? 1 : 0;
+            for (std::size_t j = begin; j < end; ++j) out[order[j]] = contains(p[order[j]]) ? 1 : 0;
         });
     }
     /// out[i] = signed_distance(p[i]) for i < n, on up to `threads` threads.

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "../detail/parallel.hpp"
@@ -166,6 +167,21 @@ template <class T>
     return code;
 }
 
+/// The indices 0 … count − 1 of `points` in Morton order through their (finite points') box;
+/// NaN and infinite points anywhere.
+template <class T>
+[[nodiscard]] std::vector<std::size_t> morton_order(const Vertex<T>* points, std::size_t count) {
+    Box<T> box;
+    for (std::size_t i = 0; i < count; ++i)
+        if (is_finite(points[i])) box.grow(points[i]);
+    std::vector<std::pair<std::uint32_t, std::size_t>> keyed(count);
+    for (std::size_t i = 0; i < count; ++i) keyed[i] = {morton_code(points[i], box), i};
+    std::sort(keyed.begin(), keyed.end());
+    std::vector<std::size_t> order(count);
+    for (std::size_t i = 0; i < count; ++i) order[i] = keyed[i].second;
+    return order;
+}
+
 /// closest_point for points[0, count) into out[0, count), on up to `threads` threads (0 = every
 /// core), the same answers as one by one. The points are taken in Morton order, and each
 /// query's sphere starts at the distance from its point to the previous point's answer (which
@@ -175,18 +191,11 @@ template <class T>
 void closest_points(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks, const Vertex<T>* points, std::size_t count,
                     PointHit<T>* out, int threads) {
     const T inf = std::numeric_limits<T>::infinity();
-    Box<T> box;
-    for (std::size_t i = 0; i < count; ++i)
-        if (is_finite(points[i])) box.grow(points[i]);
-    std::vector<std::uint64_t> order(count); // Morton code << 32 | index (count < 2³² points a sort)
-    const bool sortable = count <= std::size_t(0xffffffffu);
-    for (std::size_t i = 0; i < count; ++i)
-        order[i] = sortable ? std::uint64_t(morton_code(points[i], box)) << 32 | i : i;
-    if (sortable) std::sort(order.begin(), order.end());
+    const std::vector<std::size_t> order = morton_order(points, count);
     parallel_chunks(count, thread_count(threads), 256, [&](std::size_t begin, std::size_t end) {
         const PointHit<T>* previous = nullptr;
         for (std::size_t j = begin; j < end; ++j) {
-            const std::size_t i = sortable ? std::size_t(order[j] & 0xffffffffu) : j;
+            const std::size_t i = order[j];
             const Vertex<T>& p = points[i];
             if (tree.empty() || !is_finite(p)) {
                 out[i] = PointHit<T>{};
