@@ -7,6 +7,8 @@
 //     several beta and the exact winding number, on a closed icosphere, the same with 2% of its
 //     triangles removed and two overlapping closed spheres stored as one mesh: wrong answers
 //     (points at least 1e-3 of the diagonal from the surface) against time per point.
+// Each run times every method once, in turn, and each figure is the median over the runs. The
+// Stanford dragon is measured too when build/load_models/dragon_le.ply exists (scripts/dragon.sh).
 // Run: bash scripts/queries.sh (taskset -c 1, Release, -march=native).
 #include <isin/isin.hpp>
 
@@ -35,18 +37,6 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// Median seconds of `runs` calls of f.
-double median_seconds(int runs, const std::function<void()>& f) {
-    std::vector<double> s;
-    for (int r = 0; r < runs; ++r) {
-        const auto t0 = Clock::now();
-        f();
-        s.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
-    }
-    std::sort(s.begin(), s.end());
-    return s[s.size() / 2];
-}
 
 // Embree's closest-point callback: Ericson's ClosestPtPointTriangle on the primitive, and the
 // query's radius shrunk to each closer point (as Embree's closest_point tutorial).
@@ -108,27 +98,7 @@ void closest_points(const std::string& name, const std::vector<isin::Triangle<fl
                     int runs) {
     const auto points = box_points(tris, n, 42);
     const isin::Bvh<float> bvh{tris};
-    double sum_isin = 0, sum_embree = 0;
-    const double t_isin = median_seconds(runs, [&] {
-        sum_isin = 0;
-        for (const auto& p : points) sum_isin += double(bvh.closest_point(p).distance);
-    });
     RTCScene scene = embree_scene::make(device, tris);
-    const double t_embree = median_seconds(runs, [&] {
-        sum_embree = 0;
-        for (const auto& p : points) {
-            RTCPointQuery q{};
-            q.x = p.x, q.y = p.y, q.z = p.z, q.time = 0, q.radius = std::numeric_limits<float>::infinity();
-            RTCPointQueryContext context;
-            rtcInitPointQueryContext(&context);
-            EmbreeClosest r{&tris, std::numeric_limits<float>::infinity(), RTC_INVALID_GEOMETRY_ID};
-            rtcPointQuery(scene, &q, &context, embree_closest, &r);
-            sum_embree += double(r.distance);
-        }
-    });
-    rtcReleaseScene(scene);
-    std::printf("closest,%s,%zu,%d,isin,%.0f,%.9g\n", name.c_str(), tris.size(), n, n / t_isin, sum_isin);
-    std::printf("closest,%s,%zu,%d,embree,%.0f,%.9g\n", name.c_str(), tris.size(), n, n / t_embree, sum_embree);
 #if defined(ISIN_HAVE_CGAL)
     using K = CGAL::Simple_cartesian<double>;
     using Iterator = std::vector<K::Triangle_3>::const_iterator;
@@ -139,29 +109,89 @@ void closest_points(const std::string& name, const std::vector<isin::Triangle<fl
                                K::Point_3(t.v2.x, t.v2.y, t.v2.z));
     Tree tree(cgal_tris.cbegin(), cgal_tris.cend());
     tree.accelerate_distance_queries();
-    double sum_cgal = 0;
-    const double t_cgal = median_seconds(runs, [&] {
-        sum_cgal = 0;
-        for (const auto& p : points) {
-            const K::Point_3 q(p.x, p.y, p.z);
-            sum_cgal += std::sqrt(CGAL::squared_distance(q, tree.closest_point_and_primitive(q).first));
-        }
-    });
-    std::printf("closest,%s,%zu,%d,cgal,%.0f,%.9g\n", name.c_str(), tris.size(), n, n / t_cgal, sum_cgal);
 #endif
+    // Each run times every method once, one after the other, so that a change of load on the
+    // shared machine falls on all of them; figures are medians over the runs.
+    std::vector<isin::PointHit<float>> hits(points.size());
+    std::vector<std::string> methods = {"isin", "isin-stream", "embree"};
+#if defined(ISIN_HAVE_CGAL)
+    methods.push_back("cgal");
+#endif
+    std::vector<std::vector<double>> seconds(methods.size());
+    std::vector<double> sums(methods.size());
+    for (int r = 0; r < runs; ++r)
+        for (std::size_t m = 0; m < methods.size(); ++m) {
+            double sum = 0;
+            const auto t0 = Clock::now();
+            if (methods[m] == "isin") {
+                for (const auto& p : points) sum += double(bvh.closest_point(p).distance);
+            } else if (methods[m] == "isin-stream") {
+                bvh.closest_point(points.data(), points.size(), hits.data(), 1);
+                for (const auto& h : hits) sum += double(h.distance);
+            } else if (methods[m] == "embree") {
+                for (const auto& p : points) {
+                    RTCPointQuery q{};
+                    q.x = p.x, q.y = p.y, q.z = p.z, q.time = 0, q.radius = std::numeric_limits<float>::infinity();
+                    RTCPointQueryContext context;
+                    rtcInitPointQueryContext(&context);
+                    EmbreeClosest e{&tris, std::numeric_limits<float>::infinity(), RTC_INVALID_GEOMETRY_ID};
+                    rtcPointQuery(scene, &q, &context, embree_closest, &e);
+                    sum += double(e.distance);
+                }
+            } else {
+#if defined(ISIN_HAVE_CGAL)
+                for (const auto& p : points) {
+                    const K::Point_3 q(p.x, p.y, p.z);
+                    sum += std::sqrt(CGAL::squared_distance(q, tree.closest_point_and_primitive(q).first));
+                }
+#endif
+            }
+            seconds[m].push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+            sums[m] = sum;
+        }
+    rtcReleaseScene(scene);
+    for (std::size_t m = 0; m < methods.size(); ++m) {
+        std::sort(seconds[m].begin(), seconds[m].end());
+        std::printf("closest,%s,%zu,%d,%s,%.0f,%.9g\n", name.c_str(), tris.size(), n, methods[m].c_str(),
+                    n / seconds[m][seconds[m].size() / 2], sums[m]);
+    }
     std::fflush(stdout);
 }
 
-// One inside/outside method: its wrong answers against `truth` and its time per point.
-void inside_method(const std::string& mesh, const std::string& method, const std::vector<isin::Vertex<float>>& points,
-                   const std::vector<bool>& truth, int runs, const std::function<bool(const isin::Vertex<float>&)>& f) {
-    std::size_t wrong = 0;
-    const double t = median_seconds(runs, [&] {
-        wrong = 0;
-        for (std::size_t i = 0; i < points.size(); ++i) wrong += f(points[i]) != truth[i];
-    });
-    std::printf("inside,%s,%s,%zu,%zu,%.4g\n", mesh.c_str(), method.c_str(), points.size(), wrong,
-                t / double(points.size()) * 1e9);
+// Inside/outside methods: each one's wrong answers against `truth` and its time per point (the
+// median over `runs` runs; each run takes the points in chunks of `chunk` and times every method
+// on each chunk in turn, so that a change of load on the shared machine falls on all of them),
+// and in each run its throughput over the first method's (one-ray parity).
+constexpr std::size_t chunk = 100;
+struct InsideMethod {
+    std::string name;
+    std::function<bool(const isin::Vertex<float>&)> f;
+};
+void inside_methods(const std::string& mesh, const std::vector<InsideMethod>& methods,
+                    const std::vector<isin::Vertex<float>>& points, const std::vector<bool>& truth, int runs) {
+    std::vector<std::vector<double>> seconds(methods.size());
+    std::vector<std::size_t> wrong(methods.size());
+    for (int r = 0; r < runs; ++r) {
+        for (std::size_t m = 0; m < methods.size(); ++m) seconds[m].push_back(0), wrong[m] = 0;
+        for (std::size_t begin = 0; begin < points.size(); begin += chunk)
+            for (std::size_t m = 0; m < methods.size(); ++m) {
+                const std::size_t end = std::min(points.size(), begin + chunk);
+                std::size_t w = 0;
+                const auto t0 = Clock::now();
+                for (std::size_t i = begin; i < end; ++i) w += methods[m].f(points[i]) != truth[i];
+                seconds[m].back() += std::chrono::duration<double>(Clock::now() - t0).count();
+                wrong[m] += w;
+            }
+    }
+    for (std::size_t m = 0; m < methods.size(); ++m) {
+        std::string ratios;
+        for (std::size_t r = 0; r < seconds[m].size(); ++r)
+            ratios += (r ? " " : "") + std::to_string(seconds[0][r] / seconds[m][r]).substr(0, 4);
+        std::vector<double> s = seconds[m];
+        std::sort(s.begin(), s.end());
+        std::printf("inside,%s,%s,%zu,%zu,%.4g,%s\n", mesh.c_str(), methods[m].name.c_str(), points.size(), wrong[m],
+                    s[s.size() / 2] / double(points.size()) * 1e9, ratios.c_str());
+    }
     std::fflush(stdout);
 }
 
@@ -192,19 +222,66 @@ void inside_outside(const std::string& name, const isin::Mesh<float>& mesh, cons
     const isin::Solid<float> solid{mesh};
     const isin::Bvh<float>& bvh = solid.bvh();
     const isin::Vertex<float> dirs[3] = {{0.57f, -0.22f, 0.79f}, {-0.64f, 0.71f, 0.29f}, {0.12f, 0.35f, -0.93f}};
-    inside_method(name, "one-ray parity", points, truth, runs, [&](const isin::Vertex<float>& p) {
-        return bvh.count_hits({p, dirs[0]}) % 2 == 1;
-    });
-    inside_method(name, "majority of three rays", points, truth, runs, [&](const isin::Vertex<float>& p) {
-        int odd = 0;
-        for (const auto& d : dirs) odd += int(bvh.count_hits({p, d}) % 2);
-        return odd >= 2;
-    });
+    std::vector<InsideMethod> methods = {{"one-ray parity",
+                                          [&](const isin::Vertex<float>& p) {
+                                              return bvh.count_hits({p, dirs[0]}) % 2 == 1;
+                                          }},
+                                         {"majority of three rays", [&](const isin::Vertex<float>& p) {
+                                              int odd = 0;
+                                              for (const auto& d : dirs) odd += int(bvh.count_hits({p, d}) % 2);
+                                              return odd >= 2;
+                                          }}};
     for (const float beta : {1.0f, 1.5f, 2.0f, 3.0f, 4.0f})
-        inside_method(name, "fast winding beta=" + std::to_string(beta).substr(0, 3), points, truth, runs,
-                      [&](const isin::Vertex<float>& p) { return solid.winding_number(p, beta) >= 0.5f; });
-    inside_method(name, "exact winding", points, truth, 1,
-                  [&](const isin::Vertex<float>& p) { return solid.winding_number_exact(p) >= 0.5f; });
+        methods.push_back(
+            {"fast winding beta=" + std::to_string(beta).substr(0, 3),
+             [&solid, beta](const isin::Vertex<float>& p) { return solid.winding_number(p, beta) >= 0.5f; }});
+    inside_methods(name, methods, points, truth, runs);
+    inside_methods(
+        name,
+        {methods[0],
+         {"exact winding", [&](const isin::Vertex<float>& p) { return solid.winding_number_exact(p) >= 0.5f; }}},
+        points, truth, 1);
+}
+
+// contains (beta = 2) against one-ray parity on a mesh whose truth is not known (a scan):
+// time per point only, the two timed in turn on each chunk of points; points of the enlarged
+// box at least 1e-3 of the diagonal from the surface.
+void inside_timing(const std::string& name, const isin::Mesh<float>& mesh, int n, int runs) {
+    const isin::Solid<float> solid{mesh};
+    const isin::Bvh<float>& bvh = solid.bvh();
+    std::vector<isin::Triangle<float>> all;
+    for (std::size_t i = 0; i < mesh.size(); ++i) all.push_back(mesh.triangle(i));
+    isin::Box<float> box;
+    for (const auto& t : all) box.grow(t.v0), box.grow(t.v1), box.grow(t.v2);
+    const float diag = isin::length(box.hi - box.lo);
+    std::vector<isin::Vertex<float>> points;
+    for (const auto& p : box_points(all, 4 * n, 9))
+        if (int(points.size()) < n && !bvh.closest_point(p, 1e-3f * diag)) points.push_back(p);
+    std::vector<double> parity, contains;
+    std::size_t odd = 0, in = 0;
+    for (int r = 0; r < runs; ++r) {
+        odd = 0, in = 0;
+        parity.push_back(0), contains.push_back(0);
+        for (std::size_t begin = 0; begin < points.size(); begin += chunk) {
+            const std::size_t end = std::min(points.size(), begin + chunk);
+            auto t0 = Clock::now();
+            for (std::size_t i = begin; i < end; ++i) odd += bvh.count_hits({points[i], {0.57f, -0.22f, 0.79f}}) % 2;
+            parity.back() += std::chrono::duration<double>(Clock::now() - t0).count();
+            t0 = Clock::now();
+            for (std::size_t i = begin; i < end; ++i) in += solid.contains(points[i]);
+            contains.back() += std::chrono::duration<double>(Clock::now() - t0).count();
+        }
+    }
+    const double np = double(points.size()) * 1e-9;
+    std::string ratios;
+    for (std::size_t r = 0; r < parity.size(); ++r)
+        ratios += (r ? " " : "") + std::to_string(parity[r] / contains[r]).substr(0, 4);
+    std::sort(parity.begin(), parity.end()), std::sort(contains.begin(), contains.end());
+    std::printf("inside,%s,one-ray parity,%zu,-,%.4g,\n", name.c_str(), points.size(), parity[parity.size() / 2] / np);
+    std::printf("inside,%s,fast winding beta=2.0,%zu,-,%.4g,%s\n", name.c_str(), points.size(),
+                contains[contains.size() / 2] / np, ratios.c_str());
+    std::printf("inside,%s,inside by parity %zu by contains %zu,%zu,-,-,\n", name.c_str(), odd, in, points.size());
+    std::fflush(stdout);
 }
 
 } // namespace
@@ -218,11 +295,20 @@ int main(int argc, char** argv) {
     std::printf("kind,mesh,triangles,points,method,points_per_s,checksum\n");
     for (const std::string name : {"icosphere-80k", "trefoil-300k"})
         closest_points(name, meshes::make<float>(name), device, n, runs);
+    // The Stanford dragon when scripts/dragon.sh has fetched it (or the file given as argument 3).
+    const std::string dragon = argc > 3 ? argv[3] : "build/load_models/dragon_le.ply";
+    std::vector<isin::Triangle<float>> dragon_tris;
+    if (std::FILE* f = std::fopen(dragon.c_str(), "rb")) {
+        std::fclose(f);
+        dragon_tris = isin::load_mesh<float>(dragon);
+        closest_points("dragon-871k", dragon_tris, device, n, runs);
+    }
     rtcReleaseDevice(device);
 
-    std::printf("kind,mesh,method,points,wrong,ns_per_point\n");
+    std::printf("kind,mesh,method,points,wrong,ns_per_point,throughput_over_parity_each_run\n");
     const auto a = solids::icosphere<float>(5, {0, 0, 0}, 1.0), b = solids::icosphere<float>(5, {0.8, 0.3, 0}, 1.0);
     inside_outside("closed icosphere 20k", a, {a}, n / 4, runs);
     inside_outside("icosphere 20k, 2% removed", solids::with_holes(a, 0.02), {a}, n / 4, runs);
     inside_outside("two overlapping icospheres 41k", solids::merged(a, b), {a, b}, n / 4, runs);
+    if (!dragon_tris.empty()) inside_timing("dragon 871k", isin::Mesh<float>::from_triangles(dragon_tris), n / 4, runs);
 }

@@ -158,8 +158,25 @@ TEST_CASE_TEMPLATE("Bvh::closest_point against brute force: near, far, on vertic
         CHECK(out[i].distance == one.distance);
         CHECK(out[i].primitive == one.primitive);
     }
+    // On one thread every point follows its Morton neighbour, whose answer bounds its own: the
+    // same answers, bit for bit, on points that are near each other (a dense grid round the
+    // surface), on vertices and edges (ties between triangles), far away, and NaN.
+    for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j)
+            for (int k = 0; k < 12; ++k) points.push_back({T(-1.1 + 0.21 * i), T(-1.2 + 0.2 * j), T(-1.0 + 0.2 * k)});
+    points.push_back({std::numeric_limits<T>::quiet_NaN(), 0, 0});
+    points.push_back({0, std::numeric_limits<T>::infinity(), 0});
+    out.resize(points.size());
     bvh.closest_point(points.data(), points.size(), out.data(), 1);
-    CHECK(out[0].distance == bvh.closest_point(points[0]).distance);
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const auto one = bvh.closest_point(points[i]);
+        differ += !(out[i].distance == one.distance || (!out[i] && !one)) || out[i].primitive != one.primitive ||
+                  !(out[i].point == one.point) || out[i].u != one.u || out[i].v != one.v;
+    }
+    CHECK(differ == 0);
+    CHECK_FALSE(out[out.size() - 1]);
+    CHECK_FALSE(out[out.size() - 2]);
 }
 
 TEST_CASE_TEMPLATE("Bvh::closest_point: max_distance, far from the origin, NaN, empty", T, float, double) {
@@ -347,7 +364,22 @@ TEST_CASE_TEMPLATE("Jacobson 2013: overlapping spheres count 2, holes about 1/2,
     const isin::Solid<T> cup{half};
     CHECK(cup.winding_number_exact({0, 0, 0}) == doctest::Approx(0.5).epsilon(0.02));
 
+    // A soup of the same triangles (no shared vertices) has the same winding numbers.
+    const isin::Solid<T> soup{isin::Mesh<T>::from_triangles(triangles_of(solids::merged(a, b)))};
+    for (const isin::Vertex<T> p : {isin::Vertex<T>{T(0.4), 0, 0}, isin::Vertex<T>{T(-0.5), T(0.1), 0},
+                                    isin::Vertex<T>{T(2.5), 0, 0}, isin::Vertex<T>{T(0.3), T(0.95), T(0.2)}}) {
+        CHECK(soup.contains(p) == both.contains(p));
+        CHECK(soup.winding_number(p) == doctest::Approx(double(both.winding_number_exact(p))).epsilon(0.02));
+    }
     const T nan = std::numeric_limits<T>::quiet_NaN();
+    // beta: NaN and +inf sum every triangle exactly; below 1 it counts as 1 (p outside the ball).
+    for (const isin::Vertex<T> p : {isin::Vertex<T>{T(0.4), 0, 0}, isin::Vertex<T>{T(1.5), T(0.2), 0}}) {
+        const T exact = both.winding_number_exact(p);
+        CHECK(both.winding_number(p, nan) == doctest::Approx(double(exact)).epsilon(1e-5));
+        CHECK(both.winding_number(p, T(1e6)) == doctest::Approx(double(exact)).epsilon(1e-5));
+        CHECK(both.winding_number(p, T(0)) == both.winding_number(p, T(1)));
+        CHECK(std::isfinite(both.winding_number(p, T(0))));
+    }
     CHECK_FALSE(both.contains({nan, 0, 0}));
     CHECK(std::isnan(both.signed_distance({nan, 0, 0})));
     const isin::Solid<T> empty{isin::Mesh<T>{}};

@@ -6,8 +6,8 @@
 /// out), and a smooth, meaningful value on meshes with holes, overlaps and self-intersections
 /// (2 where two closed parts overlap; about 1/2 at a hole). Made fast by the far-field
 /// expansion of Barill, Dickson, Schmidt, Levin & Jacobson, "Fast Winding Numbers for Soups and
-/// Clouds" (2018): a cluster of triangles seen from farther than beta times its radius counts
-/// as one dipole.
+/// Clouds" (2018) over the nodes of the Solid's Bvh: a node's child (or a leaf's triangle) seen
+/// from farther than beta times its radius counts as one dipole, 8 children in lanes.
 ///
 ///     isin::Solid<float> solid{mesh};
 ///     if (solid.contains(p)) ...;            // winding number ≥ 1/2
@@ -17,10 +17,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
-#include <numeric>
 #include <type_traits>
 #include <vector>
 
+#include "bvh/query_lanes.hpp"
 #include "bvh/triangle_bvh.hpp"
 #include "detail/parallel.hpp"
 #include "indexed_mesh.hpp"
@@ -44,8 +44,9 @@ template <class T>
 }
 
 /// A closed (or not quite closed) triangle mesh as a solid: winding number, inside/outside,
-/// signed distance. Holds its own copy of the triangles, a cluster tree for the winding number
-/// and a Bvh for distances. Non-finite triangles are left out.
+/// signed distance. Holds a Bvh of the triangles (for distances and crossings) and, for each of
+/// its nodes, the dipoles of the 8 children (the far field of the winding number). Zero-area and
+/// non-finite triangles are left out (they subtend no solid angle).
 template <class T>
 class Solid {
     static_assert(std::is_floating_point_v<T>, "isin::Solid needs float or double");
@@ -56,11 +57,7 @@ public:
     /// p; larger is more accurate and slower; +∞ gives the exact sum over every triangle).
     explicit Solid(const Mesh<T>& mesh, T beta = T(2), const BvhOptions& options = {})
         : bvh_(mesh, options), beta_(beta) {
-        for (std::size_t i = 0; i < mesh.size(); ++i) {
-            const Triangle<T> t = mesh.triangle(i);
-            if (is_finite(t.v0) && is_finite(t.v1) && is_finite(t.v2)) triangles_.push_back(t);
-        }
-        if (!triangles_.empty()) build(0, triangles_.size());
+        build_far_field();
     }
 
     /// The generalized winding number at p by the far-field expansion with this solid's beta:
@@ -71,7 +68,10 @@ public:
     /// The exact generalized winding number: Σ solid_angle / 4π over every triangle, O(n).
     [[nodiscard]] T winding_number_exact(const Vertex<T>& p) const noexcept {
         T sum = T(0);
-        for (const Triangle<T>& t : triangles_) sum += solid_angle(p, t);
+        const TriangleBlocks<T>& blocks = bvh_.blocks();
+        for (std::size_t i = 0; i < blocks.size(); ++i)
+            for (int k = 0, live = detail::live_lanes(blocks[i]); k < live; ++k)
+                sum += solid_angle(p, lane(blocks[i], k));
         return sum / (T(4) * pi);
     }
     /// True when p is inside: winding_number(p) ≥ 1/2 (false for NaN p).
@@ -83,10 +83,12 @@ public:
         const T d = bvh_.closest_point(p).distance;
         return contains(p) ? -d : d;
     }
-    /// out[i] = contains(p[i]) (1 or 0) for i < n, on up to `threads` threads (0 = every core).
+    /// out[i] = contains(p[i]) (1 or 0) for i < n, on up to `threads` threads (0 = every core);
+    /// the points are taken in Morton order, so that neighbours share the nodes they visit.
     void contains(const Vertex<T>* p, std::size_t n, std::uint8_t* out, int threads = 0) const {
+        const std::vector<std::size_t> order = detail::morton_order(p, n);
         detail::parallel_chunks(n, detail::thread_count(threads), 256, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t i = begin; i < end; ++i) out[i] = contains(p[i]) ? 1 : 0;
+            for (std::size_t j = begin; j < end; ++j) out[order[j]] = contains(p[order[j]]) ? 1 : 0;
         });
     }
     /// out[i] = signed_distance(p[i]) for i < n, on up to `threads` threads.
@@ -101,94 +103,187 @@ public:
     /// The far-field accuracy given at construction.
     [[nodiscard]] T beta() const noexcept { return beta_; }
     /// Number of triangles the winding number sums over.
-    [[nodiscard]] std::size_t size() const noexcept { return triangles_.size(); }
+    [[nodiscard]] std::size_t size() const noexcept { return bvh_.tree().size(); }
 
 private:
     static constexpr T pi = T(3.14159265358979323846);
-    static constexpr std::size_t leaf_size = 8;
+    using Tree = BvhTree<T>;
 
-    // A cluster of triangles_[first, first + count): its dipole (the sum of its triangles' area
-    // vectors, placed at their area-weighted centroid) and the radius of a ball round that
-    // centroid holding every vertex. Children: `left` and left + 1 … (index of the right
-    // child in `right`); a leaf has count ≤ leaf_size and no children.
-    struct Cluster {
-        Vertex<T> centre, area;
-        T radius;
-        std::uint32_t first, count, right;
+    // The far field of a node's 8 children, in lanes: each child's dipole (the sum of its
+    // triangles' area vectors, placed at their area-weighted centroid `c`) and the squared
+    // radius of a ball round c holding every vertex. An empty slot has a zero dipole and an
+    // infinite radius (never far, never entered).
+    struct alignas(64) FarField {
+        T c[3][8], a[3][8], r2[8];
     };
 
-    // Clusters by median split of the centroids on their longest axis, depth first (a node's
-    // left child follows it); returns its index.
-    std::uint32_t build(std::size_t first, std::size_t end) {
-        const auto index = static_cast<std::uint32_t>(clusters_.size());
-        clusters_.push_back({});
-        Vertex<T> area{T(0), T(0), T(0)}, weighted{T(0), T(0), T(0)};
-        Box<T> box;
-        for (std::size_t i = first; i < end; ++i) {
-            const Triangle<T>& t = triangles_[i];
-            const Vertex<T> N = T(0.5) * normal(t); // Barill: area vector a·n = ½ (V1−V0)×(V2−V0)
-            const Vertex<T> centroid = (t.v0 + t.v1 + t.v2) / T(3);
-            area += N;
-            weighted += length(N) * centroid;
-            box.grow(centroid);
+    [[nodiscard]] static Triangle<T> lane(const detail::TriangleBlock<T>& b, int k) noexcept {
+        return {{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]},
+                {b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]},
+                {b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]}};
+    }
+
+    // When a cluster counts as its dipole: its centre farther than beta·(its ball's radius) from
+    // p (beta2 = beta² ≥ 1: outside the ball), and d2 above √(smallest normal), so that the
+    // dipole's d2·√d2 cannot underflow to 0.
+    struct FarTest {
+        T beta2, floor = T(1) / std::sqrt(T(1) / std::numeric_limits<T>::min());
+        [[nodiscard]] bool operator()(T d2, T r2) const noexcept {
+            return (d2 > beta2 * r2) & (d2 > floor); // Barill: far field beyond beta·r
         }
-        T total = T(0);
-        for (std::size_t i = first; i < end; ++i) total += length(normal(triangles_[i])) * T(0.5);
-        // Barill: the expansion's centre is the area-weighted centroid (the box's centre for no area).
-        const Vertex<T> centre = total > T(0) ? weighted / total : T(0.5) * (box.lo + box.hi);
-        T r2 = T(0);
-        for (std::size_t i = first; i < end; ++i)
-            for (const Vertex<T>& v : {triangles_[i].v0, triangles_[i].v1, triangles_[i].v2})
-                r2 = std::max(r2, dot(v - centre, v - centre));
-        Cluster c{centre, area, std::sqrt(r2), std::uint32_t(first), std::uint32_t(end - first), 0};
-        if (end - first > leaf_size) {
-            int axis = 0;
-            const Vertex<T> extent = box.hi - box.lo;
-            if (extent.y > component(extent, axis)) axis = 1;
-            if (extent.z > component(extent, axis)) axis = 2;
-            const std::size_t mid = first + (end - first) / 2;
-            std::nth_element(triangles_.begin() + std::ptrdiff_t(first), triangles_.begin() + std::ptrdiff_t(mid),
-                             triangles_.begin() + std::ptrdiff_t(end),
-                             [axis](const Triangle<T>& x, const Triangle<T>& y) {
-                                 return component(x.v0 + x.v1 + x.v2, axis) < component(y.v0 + y.v1 + y.v2, axis);
-                             });
-            build(first, mid);
-            c.right = build(mid, end);
+    };
+
+    // Σ over 8 lanes of the dipole terms of the lanes whose `far` is 1 (those of 0 add 0),
+    // branch-free so that compilers vectorise it: Barill: 4π·w ≈ (a·n)·(c − p)/|c − p|³, with
+    // r = c − p and d2 = |r|².
+    [[nodiscard]] static T dipoles(const T (&ax)[8], const T (&ay)[8], const T (&az)[8], const T (&rx)[8],
+                                   const T (&ry)[8], const T (&rz)[8], const T (&d2)[8], const T (&far)[8]) noexcept {
+        T d[8], term[8];
+        detail::sqrt8(d2, d);
+        for (int k = 0; k < 8; ++k) {
+            const T num = ax[k] * rx[k] + ay[k] * ry[k] + az[k] * rz[k]; // Barill: (a·n)·(c − p)
+            const T den = d2[k] * d[k];                                  // Barill: |c − p|³
+            term[k] = (far[k] * num) / (far[k] * den + (T(1) - far[k]));
         }
-        clusters_[index] = c;
-        return index;
+        T sum = T(0);
+        for (int k = 0; k < 8; ++k) sum += term[k];
+        return sum;
+    }
+
+    // 4π·w of one leaf's triangles at p: each triangle seen from beyond beta·(its radius) as its
+    // own dipole (centred on its centroid), the others by their exact solid angle.
+    [[nodiscard]] static T leaf_sum(const detail::TriangleBlock<T>& b, const Vertex<T>& p,
+                                    const FarTest& is_far) noexcept {
+        const int live = detail::live_lanes(b);
+        T ax[8], ay[8], az[8], rx[8], ry[8], rz[8], d2[8], far[8];
+        for (int k = 0; k < 8; ++k) {
+            const T x0 = b.v[0][0][k], y0 = b.v[0][1][k], z0 = b.v[0][2][k];
+            const T ex = b.v[1][0][k] - x0, ey = b.v[1][1][k] - y0, ez = b.v[1][2][k] - z0;
+            const T fx = b.v[2][0][k] - x0, fy = b.v[2][1][k] - y0, fz = b.v[2][2][k] - z0;
+            ax[k] = T(0.5) * (ey * fz - ez * fy); // Barill: area vector ½ (V1−V0)×(V2−V0)
+            ay[k] = T(0.5) * (ez * fx - ex * fz);
+            az[k] = T(0.5) * (ex * fy - ey * fx);
+            const T gx = (ex + fx) / T(3), gy = (ey + fy) / T(3), gz = (ez + fz) / T(3); // centroid − V0
+            const T r2 = std::max({gx * gx + gy * gy + gz * gz,
+                                   (ex - gx) * (ex - gx) + (ey - gy) * (ey - gy) + (ez - gz) * (ez - gz),
+                                   (fx - gx) * (fx - gx) + (fy - gy) * (fy - gy) + (fz - gz) * (fz - gz)});
+            rx[k] = (x0 - p.x) + gx, ry[k] = (y0 - p.y) + gy, rz[k] = (z0 - p.z) + gz;
+            d2[k] = rx[k] * rx[k] + ry[k] * ry[k] + rz[k] * rz[k];
+            far[k] = T((k < live) & is_far(d2[k], r2));
+        }
+        T sum = dipoles(ax, ay, az, rx, ry, rz, d2, far);
+        for (int k = 0; k < live; ++k)
+            if (far[k] == T(0)) sum += solid_angle(p, lane(b, k));
+        return sum;
+    }
+
+    // Each node's FarField from its children's, children first (a child node's index is larger
+    // than its parent's); sums in double. A ball's radius is bounded by the smaller of the
+    // farthest corner of the child's box and the farthest of its children's balls.
+    void build_far_field() {
+        const std::vector<typename Tree::Node>& nodes = bvh_.tree().nodes();
+        const TriangleBlocks<T>& blocks = bvh_.blocks();
+        far_.assign(nodes.size(), FarField{});
+        std::vector<double> areas(8 * nodes.size()); // Σ triangle areas of each child, 8 a node
+        for (std::size_t i = nodes.size(); i-- > 0;) {
+            FarField& f = far_[i];
+            for (int k = 0; k < 8; ++k) {
+                const std::uint32_t ref = nodes[i].child[k];
+                Vertex<double> a{0, 0, 0}, weighted{0, 0, 0};
+                double total = 0, r = 0;
+                const Vertex<double> lo{double(nodes[i].lo[0][k]), double(nodes[i].lo[1][k]),
+                                        double(nodes[i].lo[2][k])};
+                const Vertex<double> hi{double(nodes[i].hi[0][k]), double(nodes[i].hi[1][k]),
+                                        double(nodes[i].hi[2][k])};
+                Vertex<double> c = 0.5 * lo + 0.5 * hi;
+                if (ref == Tree::empty_child) {
+                    areas[8 * i + std::size_t(k)] = 0;
+                    for (int axis = 0; axis < 3; ++axis) f.c[axis][k] = f.a[axis][k] = T(0);
+                    f.r2[k] = std::numeric_limits<T>::infinity();
+                    continue;
+                }
+                if (ref & Tree::leaf_bit) {
+                    const detail::TriangleBlock<T>& b = blocks[ref & ~Tree::leaf_bit];
+                    const int live = detail::live_lanes(b);
+                    for (int m = 0; m < live; ++m) {
+                        const Triangle<T> t = lane(b, m);
+                        const Vertex<double> v0 = to_double(t.v0), v1 = to_double(t.v1), v2 = to_double(t.v2);
+                        const Vertex<double> N = 0.5 * cross(v1 - v0, v2 - v0); // Barill: area vector
+                        a += N, total += length(N), weighted += length(N) * ((v0 + v1 + v2) / 3.0);
+                    }
+                    if (total > 0) c = weighted / total; // Barill: the area-weighted centroid
+                    double r2 = 0;
+                    for (int m = 0; m < live; ++m) {
+                        const Triangle<T> t = lane(b, m);
+                        for (const Vertex<T>& v : {t.v0, t.v1, t.v2})
+                            r2 = std::max(r2, dot(to_double(v) - c, to_double(v) - c));
+                    }
+                    r = std::sqrt(r2);
+                } else {
+                    const FarField& g = far_[ref];
+                    for (int m = 0; m < 8; ++m) {
+                        a += Vertex<double>{double(g.a[0][m]), double(g.a[1][m]), double(g.a[2][m])};
+                        total += areas[8 * std::size_t(ref) + std::size_t(m)];
+                        weighted += areas[8 * std::size_t(ref) + std::size_t(m)] *
+                                    Vertex<double>{double(g.c[0][m]), double(g.c[1][m]), double(g.c[2][m])};
+                    }
+                    if (total > 0) c = weighted / total;
+                    double by_balls = 0;
+                    for (int m = 0; m < 8; ++m) {
+                        if (nodes[ref].child[m] == Tree::empty_child) continue;
+                        const Vertex<double> cm{double(g.c[0][m]), double(g.c[1][m]), double(g.c[2][m])};
+                        by_balls = std::max(by_balls, length(cm - c) + std::sqrt(double(g.r2[m])));
+                    }
+                    const Vertex<double> corner{std::max(c.x - lo.x, hi.x - c.x), std::max(c.y - lo.y, hi.y - c.y),
+                                                std::max(c.z - lo.z, hi.z - c.z)};
+                    r = std::min(by_balls, length(corner));
+                }
+                areas[8 * i + std::size_t(k)] = total;
+                f.c[0][k] = T(c.x), f.c[1][k] = T(c.y), f.c[2][k] = T(c.z);
+                f.a[0][k] = T(a.x), f.a[1][k] = T(a.y), f.a[2][k] = T(a.z);
+                f.r2[k] = T(r * r * (1 + 1e-6)); // rounded up: the ball holds every vertex after rounding to T
+            }
+        }
+    }
+
+    [[nodiscard]] static Vertex<double> to_double(const Vertex<T>& v) noexcept {
+        return {double(v.x), double(v.y), double(v.z)};
     }
 
     Bvh<T> bvh_;
     T beta_;
-    std::vector<Triangle<T>> triangles_; // in cluster order
-    std::vector<Cluster> clusters_;      // depth first, the root first
+    std::vector<FarField> far_; // one per node of bvh_'s tree
 };
 
 template <class T>
 T Solid<T>::winding_number(const Vertex<T>& p, T beta) const noexcept {
-    if (clusters_.empty()) return T(0);
+    if (far_.empty()) return T(0);
     if (!is_finite(p)) return std::numeric_limits<T>::quiet_NaN();
-    T sum = T(0); // solid angles, over 4π at the end
-    std::uint32_t stack[2 * 64];
+    const std::vector<typename Tree::Node>& nodes = bvh_.tree().nodes();
+    const TriangleBlocks<T>& blocks = bvh_.blocks();
+    const FarTest is_far{std::max(beta * beta, T(1))}; // NaN stays NaN: nothing is far, the sum is exact
+    T sum = T(0);                                      // solid angles, over 4π at the end
+    std::uint32_t stack[Tree::depth_limit * 7 + 8];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
-        const Cluster& c = clusters_[stack[--top]];
-        const Vertex<T> r = c.centre - p;
-        const T d2 = dot(r, r);
-        if (d2 > beta * beta * c.radius * c.radius) { // Barill: far field beyond beta·radius
-            const T d = std::sqrt(d2);
-            sum += dot(c.area, r) / (d2 * d); // Barill: dipole term 4π·w ≈ (a·n)·(c − p)/|c − p|³
-            continue;
+        const std::uint32_t i = stack[--top];
+        const FarField& f = far_[i];
+        T rx[8], ry[8], rz[8], d2[8], far[8];
+        for (int k = 0; k < 8; ++k) {
+            rx[k] = f.c[0][k] - p.x, ry[k] = f.c[1][k] - p.y, rz[k] = f.c[2][k] - p.z;
+            d2[k] = rx[k] * rx[k] + ry[k] * ry[k] + rz[k] * rz[k];
+            far[k] = T(is_far(d2[k], f.r2[k])); // an empty slot never is (infinite radius)
         }
-        if (c.right == 0) {
-            for (std::uint32_t i = c.first; i < c.first + c.count; ++i) sum += solid_angle(p, triangles_[i]);
-            continue;
+        sum += dipoles(f.a[0], f.a[1], f.a[2], rx, ry, rz, d2, far);
+        for (int k = 0; k < 8; ++k) {
+            const std::uint32_t ref = nodes[i].child[k];
+            if (far[k] != T(0) || ref == Tree::empty_child) continue;
+            if (ref & Tree::leaf_bit)
+                sum += leaf_sum(blocks[ref & ~Tree::leaf_bit], p, is_far);
+            else
+                stack[top++] = ref;
         }
-        const auto self = static_cast<std::uint32_t>(&c - clusters_.data());
-        stack[top++] = c.right;
-        stack[top++] = self + 1;
     }
     return sum / (T(4) * pi);
 }

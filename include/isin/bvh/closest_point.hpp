@@ -7,9 +7,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "../detail/parallel.hpp"
 #include "../point_hit.hpp"
+#include "query_lanes.hpp"
 #include "tree.hpp"
 #include "triangles.hpp"
 
@@ -42,16 +45,42 @@ ISIN_DETAIL_INLINE void triangle_box_distances(const TriangleBlock<T>& b, const 
         }
 }
 
-/// The closest point of the tree's triangles to p within max_distance (PointHit; a miss when
-/// none, or for a NaN or infinite p). Of triangles at the same distance, the lowest index.
+/// Lower bounds of the squared distances from p to a block's 8 triangles (all lanes, padding
+/// too): the larger of the distance to each triangle's box and to its plane, |(p − V0)·N|/|N|,
+/// the latter less a bound on its rounding error and on that of the exact test, so that it
+/// never exceeds the distance closest_on_triangle computes. Overflow and NaN leave the box's.
 template <class T>
-[[nodiscard]] PointHit<T> closest_point(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks, const Vertex<T>& p,
-                                        T max_distance) noexcept {
+ISIN_DETAIL_INLINE void triangle_lower_bounds(const TriangleBlock<T>& b, const T (&p)[3], T (&d2)[8]) noexcept {
+    triangle_box_distances(b, p, d2);
+    T s[8], nn[8], scale2[8], scale[8];
+    for (int k = 0; k < 8; ++k) {
+        const T ex = b.v[1][0][k] - b.v[0][0][k], ey = b.v[1][1][k] - b.v[0][1][k], ez = b.v[1][2][k] - b.v[0][2][k];
+        const T fx = b.v[2][0][k] - b.v[0][0][k], fy = b.v[2][1][k] - b.v[0][1][k], fz = b.v[2][2][k] - b.v[0][2][k];
+        const T ax = p[0] - b.v[0][0][k], ay = p[1] - b.v[0][1][k], az = p[2] - b.v[0][2][k];
+        const T nx = ey * fz - ez * fy, ny = ez * fx - ex * fz, nz = ex * fy - ey * fx; // §2: N = (V1−V0) × (V2−V0)
+        s[k] = ax * nx + ay * ny + az * nz;                                             // (p − V0)·N
+        nn[k] = nx * nx + ny * ny + nz * nz;
+        const T e2 = ex * ex + ey * ey + ez * ez, f2 = fx * fx + fy * fy + fz * fz;
+        scale2[k] = (ax * ax + ay * ay + az * az + e2 + f2) * e2 * f2; // ≥ ((|p − V0| + |E|+|F|)·|E||F|)²/3
+    }
+    sqrt8(scale2, scale);
+    const T eps = std::numeric_limits<T>::epsilon();
+    for (int k = 0; k < 8; ++k) {
+        const T t = std::max(std::fabs(s[k]) - T(32) * eps * scale[k], T(0));
+        const T plane2 = nn[k] > T(0) ? t * t / nn[k] * (T(1) - T(16) * eps) : T(0);
+        d2[k] = std::max(d2[k], plane2); // a NaN plane2 leaves the box's
+    }
+}
+
+/// closest_point (below) with the sphere's squared radius starting at `start2` (max_distance²,
+/// or less: a bound known to hold the answer).
+template <class T>
+[[nodiscard]] PointHit<T> closest_point_within(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks,
+                                               const Vertex<T>& p, T start2) noexcept {
     PointHit<T> best;
-    if (tree.empty() || !is_finite(p) || !(max_distance >= T(0))) return best;
     using Tree = BvhTree<T>;
     const T q[3] = {p.x, p.y, p.z};
-    T best2 = max_distance * max_distance; // the sphere's squared radius; +∞ for no bound
+    T best2 = start2; // the sphere's squared radius; +∞ for no bound
     TrianglePoint<T> found{};
     std::uint32_t found_primitive = PointHit<T>::none;
     std::uint32_t found_leaf = 0;
@@ -84,8 +113,8 @@ template <class T>
         }
         const std::uint32_t leaf = e.ref & ~Tree::leaf_bit;
         const typename TriangleBlocks<T>::Block& b = blocks[leaf];
-        T box2[8]; // squared distances to the 8 triangles' boxes: the exact test only where they are in reach
-        triangle_box_distances(b, q, box2);
+        T box2[8]; // lower bounds of the 8 triangles' squared distances: the exact test only where they are in reach
+        triangle_lower_bounds(b, q, box2);
         for (int k = 0, live = live_lanes(b); k < live; ++k) {
             if (!(box2[k] <= best2)) continue;
             const Vertex<T> v0{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]};
@@ -98,7 +127,7 @@ template <class T>
             }
         }
     }
-    if (found_lane < 0) return best;
+    if (found_lane < 0) return best; // nothing within the start radius
     const typename TriangleBlocks<T>::Block& b = blocks[found_leaf];
     const int k = found_lane;
     const Triangle<T> tri{{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]},
@@ -111,14 +140,81 @@ template <class T>
     return best;
 }
 
+/// The closest point of the tree's triangles to p within max_distance (PointHit; a miss when
+/// none, or for a NaN or infinite p). Of triangles at the same distance, the lowest index.
+template <class T>
+[[nodiscard]] PointHit<T> closest_point(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks, const Vertex<T>& p,
+                                        T max_distance) noexcept {
+    if (tree.empty() || !is_finite(p) || !(max_distance >= T(0))) return PointHit<T>{};
+    return closest_point_within(tree, blocks, p, max_distance * max_distance);
+}
+
+/// The position of p along a Morton (Z-order) curve through `box`, 10 bits an axis; NaN and
+/// points outside the box clamp to its faces.
+template <class T>
+[[nodiscard]] inline std::uint32_t morton_code(const Vertex<T>& p, const Box<T>& box) noexcept {
+    std::uint32_t code = 0;
+    const T c[3] = {p.x, p.y, p.z}, lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
+    for (int a = 0; a < 3; ++a) {
+        const T x = hi[a] > lo[a] ? (c[a] - lo[a]) / (hi[a] - lo[a]) * T(1023) : T(0);
+        auto cell = static_cast<std::uint32_t>(x >= T(0) ? std::min(x, T(1023)) : T(0)); // NaN: 0
+        cell = (cell | (cell << 16)) & 0x030000ffu;                                      // spread the 10 bits two apart
+        cell = (cell | (cell << 8)) & 0x0300f00fu;
+        cell = (cell | (cell << 4)) & 0x030c30c3u;
+        cell = (cell | (cell << 2)) & 0x09249249u;
+        code |= cell << a;
+    }
+    return code;
+}
+
+/// The indices 0 … count − 1 of `points` in Morton order through their (finite points') box;
+/// NaN and infinite points anywhere.
+template <class T>
+[[nodiscard]] std::vector<std::size_t> morton_order(const Vertex<T>* points, std::size_t count) {
+    Box<T> box;
+    for (std::size_t i = 0; i < count; ++i)
+        if (is_finite(points[i])) box.grow(points[i]);
+    std::vector<std::pair<std::uint32_t, std::size_t>> keyed(count);
+    for (std::size_t i = 0; i < count; ++i) keyed[i] = {morton_code(points[i], box), i};
+    std::sort(keyed.begin(), keyed.end());
+    std::vector<std::size_t> order(count);
+    for (std::size_t i = 0; i < count; ++i) order[i] = keyed[i].second;
+    return order;
+}
+
 /// closest_point for points[0, count) into out[0, count), on up to `threads` threads (0 = every
-/// core); chunks of 256 points, the same answers as one by one.
+/// core), the same answers as one by one. The points are taken in Morton order, and each
+/// query's sphere starts at the distance from its point to the previous point's answer (which
+/// bounds its own), a little enlarged for rounding; when that finds nothing, the query is
+/// repeated without the bound, so no answer depends on the order.
 template <class T>
 void closest_points(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks, const Vertex<T>* points, std::size_t count,
                     PointHit<T>* out, int threads) {
+    const T inf = std::numeric_limits<T>::infinity();
+    const std::vector<std::size_t> order = morton_order(points, count);
     parallel_chunks(count, thread_count(threads), 256, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i)
-            out[i] = closest_point(tree, blocks, points[i], std::numeric_limits<T>::infinity());
+        const PointHit<T>* previous = nullptr;
+        for (std::size_t j = begin; j < end; ++j) {
+            const std::size_t i = order[j];
+            const Vertex<T>& p = points[i];
+            if (tree.empty() || !is_finite(p)) {
+                out[i] = PointHit<T>{};
+                continue;
+            }
+            T start2 = inf;
+            if (previous != nullptr && *previous) {
+                // |p − q| bounds p's distance; q (the neighbour's answer) is rounded to T, and the
+                // walk's own distances carry rounding too: 1e-3 relative and a few ulps of the
+                // coordinates keep the answer inside.
+                const Vertex<T> q = previous->point;
+                const T slack = T(64) * std::numeric_limits<T>::epsilon() * (max_abs(p) + max_abs(q));
+                const T d = length(p - q) * T(1.001) + slack;
+                start2 = d * d;
+            }
+            out[i] = closest_point_within(tree, blocks, p, start2);
+            if (!out[i] && start2 < inf) out[i] = closest_point_within(tree, blocks, p, inf);
+            previous = &out[i];
+        }
     });
 }
 
