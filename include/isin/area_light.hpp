@@ -142,10 +142,11 @@ template <class T>
 
 /// How a RectLight is sampled at one point.
 struct LightSampling {
-    int samples = 16;     ///< stratified samples over the rectangle
-    bool adaptive = true; ///< shadow rays to the four corners first, to the samples only if they disagree
-    bool shadows = true;  ///< cast shadow rays (§9); without, every sample is visible
-    bool opaque = true;   ///< nothing in the scene is transparent: shadow rays through `occluded`
+    int samples = 16; ///< stratified samples over the rectangle
+    bool adaptive =
+        true; ///< rays to the corners (and from 64 samples a quarter of them) first, the rest if they disagree
+    bool shadows = true; ///< cast shadow rays (§9); without, every sample is visible
+    bool opaque = true;  ///< nothing in the scene is transparent: shadow rays through `occluded`
 };
 
 /// Whether rect_light_term traces shadow rays to the corners first (LightSampling::adaptive with
@@ -158,9 +159,11 @@ struct LightSampling {
 /// included (§9), estimated from s.samples stratified samples seeded by `seed`: the colour it adds
 /// to p's local colour. Shadow rays go to `scene` as a stream (occluded, or transmittance unless
 /// s.opaque); `shadow_rays` counts them. With s.adaptive (and 8 samples or more) the shadow rays
-/// to the rectangle's four corners are traced first, and when they agree the samples take their
-/// value without rays (as POV-Ray's adaptive area lights): exact outside penumbrae, but an
-/// occluder that hides none or all of the corners and not the rest from p is missed.
+/// to the rectangle's four corners are traced first, then, from 64 samples on, those to the probe
+/// samples (the samples in even columns and rows of the strata, a quarter); when all agree the other
+/// samples take their value without rays (as POV-Ray's adaptive area lights): exact outside
+/// penumbrae, but an occluder that hides none or all of the corners and probes and not the rest
+/// from p is missed (the probes, spread over the rectangle, make that rarer as samples grow).
 /// `corners`, where given, holds what the shadow rays from p.from to the four corners found
 /// (1 − blocked, or their transmittance): traced by the caller with other points' (a stream).
 template <class T, class SceneT>
@@ -188,35 +191,40 @@ template <class T, class SceneT>
     for (T& t : one) t = T(1);
     V diffuse_sum = V(T(0)), specular_sum = V(T(0));
     const auto load = [](const T* a) { return detail::load_lanes<T, V>(a); };
+    // Places samples k0 … k0 + padded − 1 (their strata counted on from (i, j), no remainders):
+    // their points q, N·L (0 where unlit or past the last sample) and Rf·V.
+    const auto place = [&](int k0, int m, int padded, std::uint32_t& i, std::uint32_t& j) {
+        for (int k = 0; k < padded; ++k) {
+            column[k] = i, row[k] = j;
+            if (++i == nu) i = 0, ++j;
+        }
+        for (int k = 0; k < padded; ++k)
+            detail::sample_uv(seeds, nu, nv, column[k], row[k], std::uint32_t(k0 + k), inv_n, u[k], v[k]);
+        for (int b = 0; b < padded; b += W) { // §7 a register of samples at a time, as light_sample places them
+            const V su = load(u + b), sv = load(v + b);
+            const V x = lane_fma(sv, V(light.edge_v.x), lane_fma(su, V(light.edge_u.x), V(light.corner.x)));
+            const V y = lane_fma(sv, V(light.edge_v.y), lane_fma(su, V(light.edge_u.y), V(light.corner.y)));
+            const V z = lane_fma(sv, V(light.edge_v.z), lane_fma(su, V(light.edge_u.z), V(light.corner.z)));
+            detail::store_lanes(x, qx + b), detail::store_lanes(y, qy + b), detail::store_lanes(z, qz + b);
+            V lx = x - V(p.point.x), ly = y - V(p.point.y), lz = z - V(p.point.z);
+            (void)detail::lane_normalize<T>(lx, ly, lz); // §2: L = (q − P)/|q − P|, or 0
+            const V c = detail::lane_dot(V(p.N.x), V(p.N.y), V(p.N.z), lx, ly, lz); // §7: N·L
+            // §7: Rf = d − 2(d·N)N with d = −L, and its cosine with V
+            const V twice = T(2) * detail::lane_dot(-lx, -ly, -lz, V(p.N.x), V(p.N.y), V(p.N.z));
+            const V rx = lane_fma(-twice, V(p.N.x), -lx), ry = lane_fma(-twice, V(p.N.y), -ly),
+                    rz = lane_fma(-twice, V(p.N.z), -lz);
+            detail::store_lanes(detail::lane_dot(rx, ry, rz, V(p.V.x), V(p.V.y), V(p.V.z)), cosine + b);
+            detail::store_lanes(select(c > T(0), c, V(T(0))), n_dot_l + b); // §7: facing away → unlit
+        }
+        for (int k = m; k < padded; ++k) n_dot_l[k] = T(0); // past the last sample
+    };
     // Adds every sample's term, with its shadow ray or, where `assumed` ≥ 0, that visibility.
     const auto shade = [&](T assumed) {
         std::uint32_t i = 0, j = 0;
         for (int k0 = 0; k0 < n; k0 += chunk) {
             const int m = std::min(chunk, n - k0), padded = (m + W - 1) / W * W;
-            for (int k = 0; k < padded; ++k) { // stratum (i, j) of sample k0 + k, counted (no remainders)
-                column[k] = i, row[k] = j;
-                if (++i == nu) i = 0, ++j;
-            }
-            for (int k = 0; k < padded; ++k)
-                detail::sample_uv(seeds, nu, nv, column[k], row[k], std::uint32_t(k0 + k), inv_n, u[k], v[k]);
-            for (int b = 0; b < padded; b += W) { // §7 a register of samples at a time, as light_sample places them
-                const V su = load(u + b), sv = load(v + b);
-                const V x = lane_fma(sv, V(light.edge_v.x), lane_fma(su, V(light.edge_u.x), V(light.corner.x)));
-                const V y = lane_fma(sv, V(light.edge_v.y), lane_fma(su, V(light.edge_u.y), V(light.corner.y)));
-                const V z = lane_fma(sv, V(light.edge_v.z), lane_fma(su, V(light.edge_u.z), V(light.corner.z)));
-                detail::store_lanes(x, qx + b), detail::store_lanes(y, qy + b), detail::store_lanes(z, qz + b);
-                V lx = x - V(p.point.x), ly = y - V(p.point.y), lz = z - V(p.point.z);
-                (void)detail::lane_normalize<T>(lx, ly, lz); // §2: L = (q − P)/|q − P|, or 0
-                const V c = detail::lane_dot(V(p.N.x), V(p.N.y), V(p.N.z), lx, ly, lz); // §7: N·L
-                // §7: Rf = d − 2(d·N)N with d = −L, and its cosine with V
-                const V twice = T(2) * detail::lane_dot(-lx, -ly, -lz, V(p.N.x), V(p.N.y), V(p.N.z));
-                const V rx = lane_fma(-twice, V(p.N.x), -lx), ry = lane_fma(-twice, V(p.N.y), -ly),
-                        rz = lane_fma(-twice, V(p.N.z), -lz);
-                detail::store_lanes(detail::lane_dot(rx, ry, rz, V(p.V.x), V(p.V.y), V(p.V.z)), cosine + b);
-                detail::store_lanes(select(c > T(0), c, V(T(0))), n_dot_l + b); // §7: facing away → unlit
-            }
-            for (int k = m; k < padded; ++k) n_dot_l[k] = T(0); // past the last sample
-            for (int k = 0; k < padded; ++k)                    // §7: cos^shininess, where it can count
+            place(k0, m, padded, i, j);
+            for (int k = 0; k < padded; ++k) // §7: cos^shininess, where it can count
                 spec[k] = n_dot_l[k] > T(0) && cosine[k] > min_cos ? specular_power(cosine[k], p.shininess) : T(0);
             if (assumed >= T(0) || !s.shadows) {
                 const T visible = s.shadows ? assumed : T(1);
@@ -243,11 +251,38 @@ template <class T, class SceneT>
             }
         }
     };
+    // Below this many samples the probes cost more than the rays they save (one small stream a point).
+    constexpr int probe_from = 64;
+    // §9: whether the shadow rays to the probe samples (those in even columns and rows of the
+    // strata: a quarter of them, spread over the whole rectangle) all find `expected`.
+    const auto probe_agrees = [&](T expected) {
+        std::uint32_t i = 0, j = 0;
+        for (int k0 = 0; k0 < n; k0 += chunk) {
+            const int m = std::min(chunk, n - k0), padded = (m + W - 1) / W * W;
+            place(k0, m, padded, i, j);
+            int r = 0;
+            for (int k = 0; k < m; ++k)
+                if (((column[k] | (nv > 1 ? row[k] : 0u)) & 1u) == 0u && n_dot_l[k] > T(0))
+                    rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
+            if (r == 0) continue;
+            shadow_rays += std::uint64_t(r);
+            if (s.opaque) {
+                scene.occluded(rays, std::size_t(r), one, blocked);
+                for (int t = 0; t < r; ++t)
+                    if ((blocked[t] ? T(0) : T(1)) != expected) return false;
+            } else {
+                scene.transmittance(rays, std::size_t(r), one, seen);
+                for (int t = 0; t < r; ++t)
+                    if (seen[t] != expected) return false;
+            }
+        }
+        return true;
+    };
     if (!corners_first(LightSampling{n, s.adaptive, s.shadows, s.opaque})) {
         shade(T(-1));
     } else {
-        // §9: shadow rays to the rectangle's four corners first; where they agree, the samples
-        // take their value (exact for one straight occluding edge, which cuts the rectangle by a line).
+        // §9: shadow rays to the rectangle's four corners first, then (64 samples on) to a quarter of them;
+        // where all agree, the rest take their value (exact for one straight occluding edge).
         if (corners) {
             for (int c = 0; c < 4; ++c) seen[c] = corners[c];
         } else {
@@ -260,9 +295,11 @@ template <class T, class SceneT>
                 scene.transmittance(rays, 4u, one, seen);
             }
         }
-        const bool agree = seen[0] == seen[1] && seen[0] == seen[2] && seen[0] == seen[3];
-        if (agree && seen[0] == T(0)) return {T(0), T(0), T(0)}; // umbra: every sample shadowed
-        shade(agree ? seen[0] : T(-1));
+        const T corner = seen[0];
+        const bool agree =
+            corner == seen[1] && corner == seen[2] && corner == seen[3] && (n < probe_from || probe_agrees(corner));
+        if (agree && corner == T(0)) return {T(0), T(0), T(0)}; // umbra: every sample shadowed
+        shade(agree ? corner : T(-1));
     }
     alignas(64) T lanes[2][std::size_t(W)];
     detail::store_lanes(diffuse_sum, lanes[0]), detail::store_lanes(specular_sum, lanes[1]);
