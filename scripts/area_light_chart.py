@@ -3,6 +3,7 @@ import csv
 import sys
 
 import matplotlib
+import matplotlib.ticker
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -31,6 +32,9 @@ for ax, (scene, title) in zip(axes, scenes):
             ax.plot(float(r["ms"]), float(r["rms_levels"]), "x", color=colours[pixel], markersize=8)
     ax.set_xscale("log")
     ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+    ax.yaxis.set_minor_formatter(matplotlib.ticker.ScalarFormatter())
+    ax.tick_params(axis="y", which="minor", labelsize=7)
     ax.set_xlabel("render time, ms (1 thread)")
     ax.set_ylabel("RMS error, levels of 255")
     ax.set_title(title, fontsize=10)
