@@ -204,6 +204,40 @@ TEST_CASE_TEMPLATE("rect_light_term: the penumbra's RMS error falls at least as 
     }
 }
 
+TEST_CASE_TEMPLATE("rect_light_term: from 64 samples, adaptive probes find an occluder that hides no corner", T, float,
+                   double) {
+    FloorScene<T> fs(false);
+    isin::Material<T> white;
+    const auto m = fs.scene.add_material(white);
+    // A bar 2 wide along z at y = 10 under the light's middle: from the floor below it hides a
+    // strip of the light across its whole depth, and none of its corners.
+    fs.scene.add(isin::Triangle<T>{{-1, 10, -500}, {-1, 10, 900}, {1, 10, -500}}, m);
+    fs.scene.add(isin::Triangle<T>{{1, 10, 900}, {1, 10, -500}, {-1, 10, 900}}, m);
+    int same = 0;
+    double adaptive_sum = 0, uniform_sum = 0, open_sum = 0;
+    const int points = 64;
+    for (int i = 0; i < points; ++i) {
+        const isin::Vertex<T> P{T(-3) + T(6) * T(i) / T(points - 1), fs.floor_y, T(60)};
+        const isin::LitPoint<T> p{
+            P, P + isin::Vertex<T>{0, T(1e-3), 0}, {0, 1, 0}, {0, 1, 0}, T(1), T(0), T(1), {1, 1, 1}, {1, 1, 1}};
+        std::uint64_t rays = 0;
+        isin::LightSampling s;
+        s.samples = 64;
+        const auto seed = isin::light_seed(P, 0);
+        const auto adaptive = isin::rect_light_term(fs.scene, fs.light, p, seed, s, rays);
+        s.adaptive = false;
+        const auto uniform = isin::rect_light_term(fs.scene, fs.light, p, seed, s, rays);
+        s.shadows = false;
+        const auto open = isin::rect_light_term(fs.scene, fs.light, p, seed, s, rays);
+        same += adaptive.r == uniform.r;
+        adaptive_sum += double(adaptive.r), uniform_sum += double(uniform.r), open_sum += double(open.r);
+    }
+    CAPTURE(same);
+    CHECK(uniform_sum < 0.95 * open_sum); // the bar shadows
+    CHECK(same >= points * 9 / 10);       // where the probes see it, every sample is traced: uniform's bits
+    CHECK(std::abs(adaptive_sum - uniform_sum) < 0.01 * uniform_sum);
+}
+
 TEST_CASE_TEMPLATE("RectLight renders: the same pixels on 1 and 2 threads, in bands, and as trace() gives them", T,
                    float, double) {
     FloorScene<T> fs(true);

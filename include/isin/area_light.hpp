@@ -3,13 +3,16 @@
 /// shades as the mean of point lights of its colour spread over its rectangle (§7 per point, §9
 /// per shadow ray). The renderer estimates that mean from stratified samples, jittered by a hash
 /// of the shading point's coordinates: the same picture every run, whatever the threads, tiles or
-/// bands, and independent noise from pixel to pixel.
+/// bands, and independent noise from pixel to pixel. Samples are generated and shaded a register
+/// of lanes at a time, with 32-bit hashes and no remainders.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <type_traits>
 
 #include "color.hpp"
+#include "detail/lane_pack.hpp"
 #include "ray.hpp"
 #include "shading.hpp"
 #include "vec.hpp"
@@ -62,25 +65,64 @@ template <class T>
     return detail::mix64(h ^ detail::coordinate_bits(point.z));
 }
 
+namespace detail {
+// lowbias32 (Wellons 2018): a 32-bit integer hash of two multiplies, for the samples' jitter.
+[[nodiscard]] constexpr std::uint32_t hash32(std::uint32_t x) noexcept {
+    x ^= x >> 16;
+    x *= 0x7FEB352Du;
+    x ^= x >> 15;
+    x *= 0x846CA68Bu;
+    return x ^ (x >> 16);
+}
+
+// x's top 16 bits scaled to [0, n) by a multiply and a shift (Lemire 2019): no remainder; n ≤ 65,536.
+[[nodiscard]] constexpr std::uint32_t reduce16(std::uint32_t x, std::uint32_t n) noexcept {
+    return ((x >> 16) * n) >> 16;
+}
+
+// The 32-bit seeds of one shading point's pattern: its jitter in u and v, its rotations.
+struct PatternSeeds {
+    std::uint32_t jitter_u, jitter_v, rotate_u, rotate_v;
+};
+[[nodiscard]] inline PatternSeeds pattern_seeds(std::uint64_t seed) noexcept {
+    const auto low = std::uint32_t(seed), high = std::uint32_t(seed >> 32);
+    return {low, high, hash32(low ^ 0x68E31DA4u), hash32(high ^ 0xB5297A4Du)};
+}
+
+// The (u, v) of sample k = i + j·nu of the multi-jittered set (Chiu, Shirley, Wang 1994):
+// u = (i·nv + σ_i(j) + ξ1)/(nu·nv), v = (j·nu + τ_j(i) + ξ2)/(nu·nv), σ_i, τ_j rotations by
+// hashes of i or j, ξ1, ξ2 in [0,1) with 24 bits from hashes of k; inv_n = 1/(nu·nv).
+template <class T>
+inline void sample_uv(const PatternSeeds& s, std::uint32_t nu, std::uint32_t nv, std::uint32_t i, std::uint32_t j,
+                      std::uint32_t k, T inv_n, T& u, T& v) noexcept {
+    std::uint32_t sigma = j + reduce16(hash32(s.rotate_u + i * 0x9E3779B9u), nv); // σ_i(j) = (j + h(i)) mod nv
+    sigma -= sigma >= nv ? nv : 0u;
+    std::uint32_t tau = i + reduce16(hash32(s.rotate_v + j * 0x9E3779B9u), nu); // τ_j(i) = (i + h(j)) mod nu
+    tau -= tau >= nu ? nu : 0u;
+    constexpr T unit = T(1) / T(16777216); // 2^-24: 24 random bits each, exact in float
+    const T xi1 = T(hash32(s.jitter_u + k * 0x9E3779B9u) >> 8) * unit;
+    const T xi2 = T(hash32(s.jitter_v ^ (k * 0x85EBCA6Bu)) >> 8) * unit;
+    u = (T(i * nv + sigma) + xi1) * inv_n;
+    v = (T(j * nu + tau) + xi2) * inv_n;
+}
+} // namespace detail
+
 /// Sample k (0 ≤ k < nu·nv) of the multi-jittered set seeded by `seed` (Chiu, Shirley, Wang
 /// 1994): in stratum (i, j) = (k mod nu, k div nu) of the nu × nv grid, and moreover the nu·nv
 /// samples' u fall in distinct 1/(nu·nv) strata and so do their v (an edge across the rectangle
 /// cuts off a well-stratified share): u = (i + (σ_i(j) + ξ1)/nv)/nu, v = (j + (τ_j(i) + ξ2)/nu)/nv,
-/// σ_i, τ_j rotations by hashes of seed and i or j, ξ1, ξ2 in [0,1) from a hash of seed and k.
+/// σ_i, τ_j rotations by hashes of seed and i or j, ξ1, ξ2 in [0,1) from hashes of seed and k.
+/// rect_light_term shades the same points, a register at a time.
 template <class T>
 [[nodiscard]] inline Vertex<T> light_sample(const RectLight<T>& light, const LightStrata& strata, std::uint64_t seed,
                                             int k) noexcept {
-    const auto index = [](int x) { return static_cast<std::uint64_t>(static_cast<unsigned>(x)) + 1u; };
-    const int i = k % strata.nu, j = k / strata.nu;
-    const std::uint64_t r = detail::mix64(seed + 0x9E3779B97F4A7C15ull * index(k));
-    const std::uint64_t nu = index(strata.nu) - 1u, nv = index(strata.nv) - 1u;
-    const std::uint64_t sigma = (index(j) - 1u + detail::mix64(seed ^ (0xD1B54A32D192ED03ull * index(i)))) % nv;
-    const std::uint64_t tau = (index(i) - 1u + detail::mix64(seed ^ (0x8CB92BA72F3D8DD7ull * index(j)))) % nu;
-    constexpr T unit = T(1) / T(16777216); // 2^-24: 24 random bits each, exact in float
-    const T xi1 = T(r >> 40) * unit, xi2 = T((r >> 8) & 0xFFFFFFu) * unit;
-    const T u = (T(i) + (T(sigma) + xi1) / T(strata.nv)) / T(strata.nu);
-    const T v = (T(j) + (T(tau) + xi2) / T(strata.nu)) / T(strata.nv);
-    return light.corner + u * light.edge_u + v * light.edge_v;
+    const auto nu = std::uint32_t(strata.nu < 1 ? 1 : strata.nu), nv = std::uint32_t(strata.nv < 1 ? 1 : strata.nv);
+    const auto kk = std::uint32_t(k < 0 ? 0 : k);
+    T u, v;
+    detail::sample_uv(detail::pattern_seeds(seed), nu, nv, kk % nu, kk / nu, kk, T(1) / T(nu * nv), u, v);
+    return {detail::lane_fma(v, light.edge_v.x, detail::lane_fma(u, light.edge_u.x, light.corner.x)),
+            detail::lane_fma(v, light.edge_v.y, detail::lane_fma(u, light.edge_u.y, light.corner.y)),
+            detail::lane_fma(v, light.edge_v.z, detail::lane_fma(u, light.edge_u.z, light.corner.z))};
 }
 
 /// What shading a point under an area light needs: the point, where its shadow rays start, its
@@ -100,10 +142,11 @@ template <class T>
 
 /// How a RectLight is sampled at one point.
 struct LightSampling {
-    int samples = 16;     ///< stratified samples over the rectangle
-    bool adaptive = true; ///< shadow rays to the four corners first, to the samples only if they disagree
-    bool shadows = true;  ///< cast shadow rays (§9); without, every sample is visible
-    bool opaque = true;   ///< nothing in the scene is transparent: shadow rays through `occluded`
+    int samples = 16; ///< stratified samples over the rectangle
+    bool adaptive =
+        true; ///< rays to the corners (and from 64 samples a quarter of them) first, the rest if they disagree
+    bool shadows = true; ///< cast shadow rays (§9); without, every sample is visible
+    bool opaque = true;  ///< nothing in the scene is transparent: shadow rays through `occluded`
 };
 
 /// Whether rect_light_term traces shadow rays to the corners first (LightSampling::adaptive with
@@ -116,83 +159,154 @@ struct LightSampling {
 /// included (§9), estimated from s.samples stratified samples seeded by `seed`: the colour it adds
 /// to p's local colour. Shadow rays go to `scene` as a stream (occluded, or transmittance unless
 /// s.opaque); `shadow_rays` counts them. With s.adaptive (and 8 samples or more) the shadow rays
-/// to the rectangle's four corners are traced first, and when they agree the samples take their
-/// value without rays (as POV-Ray's adaptive area lights): exact outside penumbrae, but an
-/// occluder that hides none or all of the corners and not the rest from p is missed.
+/// to the rectangle's four corners are traced first, then, from 64 samples on, those to the probe
+/// samples (the samples in even columns and rows of the strata, a quarter); when all agree the other
+/// samples take their value without rays (as POV-Ray's adaptive area lights): exact outside
+/// penumbrae, but an occluder that hides none or all of the corners and probes and not the rest
+/// from p is missed (the probes, spread over the rectangle, make that rarer as samples grow).
 /// `corners`, where given, holds what the shadow rays from p.from to the four corners found
 /// (1 − blocked, or their transmittance): traced by the caller with other points' (a stream).
 template <class T, class SceneT>
 [[nodiscard]] Color<T> rect_light_term(const SceneT& scene, const RectLight<T>& light, const LitPoint<T>& p,
                                        std::uint64_t seed, const LightSampling& s, std::uint64_t& shadow_rays,
                                        const T* corners = nullptr) {
+    using V = typename detail::LaneRegister<T>::V;
+    using detail::lane_fma, detail::select; // a register's own (found by ADL) or one value's
+    constexpr int W = int(detail::LaneRegister<T>::width);
     const LightStrata strata = light_strata(s.samples, length(light.edge_u), length(light.edge_v));
     const int n = strata.nu * strata.nv;
+    const auto nu = std::uint32_t(strata.nu), nv = std::uint32_t(strata.nv);
+    const T inv_n = T(1) / T(n);
+    const detail::PatternSeeds seeds = detail::pattern_seeds(seed);
     // A highlight term below 2^-24 of ks is left out: cos^shininess < 2^-24 where cos < 2^(-24/shininess).
     const T min_cos = p.shininess > T(0) ? std::exp2(T(-24) / p.shininess) : T(2);
-    constexpr int chunk = 64; // samples per stream of shadow rays
+    constexpr int chunk = 64; // samples per stream of shadow rays, a multiple of every register width
+    static_assert(chunk % W == 0, "whole registers");
+    alignas(64) T u[chunk], v[chunk], qx[chunk], qy[chunk], qz[chunk], n_dot_l[chunk], cosine[chunk], spec[chunk],
+        through[chunk], one[chunk], seen[chunk];
+    std::uint32_t column[chunk], row[chunk];
     Ray<T> rays[chunk];
-    T n_dot_l[chunk], spec[chunk], one[chunk], through[chunk];
+    int ray_of[chunk]; // each shadow ray's sample
     std::uint8_t blocked[chunk];
     for (T& t : one) t = T(1);
-    T diffuse_sum = T(0), specular_sum = T(0);
+    V diffuse_sum = V(T(0)), specular_sum = V(T(0));
+    const auto load = [](const T* a) { return detail::load_lanes<T, V>(a); };
+    // Places samples k0 … k0 + padded − 1 (their strata counted on from (i, j), no remainders):
+    // their points q, N·L (0 where unlit or past the last sample) and Rf·V.
+    const auto place = [&](int k0, int m, int padded, std::uint32_t& i, std::uint32_t& j) {
+        for (int k = 0; k < padded; ++k) {
+            column[k] = i, row[k] = j;
+            if (++i == nu) i = 0, ++j;
+        }
+        for (int k = 0; k < padded; ++k)
+            detail::sample_uv(seeds, nu, nv, column[k], row[k], std::uint32_t(k0 + k), inv_n, u[k], v[k]);
+        for (int b = 0; b < padded; b += W) { // §7 a register of samples at a time, as light_sample places them
+            const V su = load(u + b), sv = load(v + b);
+            const V x = lane_fma(sv, V(light.edge_v.x), lane_fma(su, V(light.edge_u.x), V(light.corner.x)));
+            const V y = lane_fma(sv, V(light.edge_v.y), lane_fma(su, V(light.edge_u.y), V(light.corner.y)));
+            const V z = lane_fma(sv, V(light.edge_v.z), lane_fma(su, V(light.edge_u.z), V(light.corner.z)));
+            detail::store_lanes(x, qx + b), detail::store_lanes(y, qy + b), detail::store_lanes(z, qz + b);
+            V lx = x - V(p.point.x), ly = y - V(p.point.y), lz = z - V(p.point.z);
+            (void)detail::lane_normalize<T>(lx, ly, lz); // §2: L = (q − P)/|q − P|, or 0
+            const V c = detail::lane_dot(V(p.N.x), V(p.N.y), V(p.N.z), lx, ly, lz); // §7: N·L
+            // §7: Rf = d − 2(d·N)N with d = −L, and its cosine with V
+            const V twice = T(2) * detail::lane_dot(-lx, -ly, -lz, V(p.N.x), V(p.N.y), V(p.N.z));
+            const V rx = lane_fma(-twice, V(p.N.x), -lx), ry = lane_fma(-twice, V(p.N.y), -ly),
+                    rz = lane_fma(-twice, V(p.N.z), -lz);
+            detail::store_lanes(detail::lane_dot(rx, ry, rz, V(p.V.x), V(p.V.y), V(p.V.z)), cosine + b);
+            detail::store_lanes(select(c > T(0), c, V(T(0))), n_dot_l + b); // §7: facing away → unlit
+        }
+        for (int k = m; k < padded; ++k) n_dot_l[k] = T(0); // past the last sample
+    };
     // Adds every sample's term, with its shadow ray or, where `assumed` ≥ 0, that visibility.
     const auto shade = [&](T assumed) {
-        for (int k0 = 0; k0 < n;) {
-            int m = 0;
-            for (; k0 < n && m < chunk; ++k0) {
-                const Vertex<T> q = light_sample(light, strata, seed, k0);
-                const Vertex<T> d = q - p.point;
-                const T len2 = dot(d, d);
-                if (!(len2 > T(0))) continue;
-                const Vertex<T> L = d / std::sqrt(len2);
-                const T c = dot(p.N, L);               // §7: N·L
-                if (!(c > T(0))) continue;             // §7: facing away → unlit, no shadow ray needed
-                const Vertex<T> Rf = reflect(-L, p.N); // §7: Rf = d − 2(d·N)N with d = −L
-                const T cosine = dot(Rf, p.V);
-                n_dot_l[m] = c;
-                spec[m] = cosine > min_cos ? specular_power(cosine, p.shininess) : T(0); // §7: cos^shininess
-                rays[m++] = {p.from, q - p.from};
-            }
-            if (m == 0) continue;
+        std::uint32_t i = 0, j = 0;
+        for (int k0 = 0; k0 < n; k0 += chunk) {
+            const int m = std::min(chunk, n - k0), padded = (m + W - 1) / W * W;
+            place(k0, m, padded, i, j);
+            for (int k = 0; k < padded; ++k) // §7: cos^shininess, where it can count
+                spec[k] = n_dot_l[k] > T(0) && cosine[k] > min_cos ? specular_power(cosine[k], p.shininess) : T(0);
             if (assumed >= T(0) || !s.shadows) {
-                const T v = s.shadows ? assumed : T(1);
-                for (int i = 0; i < m; ++i) through[i] = v;
-            } else { // §9: a ray towards the sample; anything nearer than it shadows
-                shadow_rays += std::uint64_t(m);
+                const T visible = s.shadows ? assumed : T(1);
+                for (int k = 0; k < padded; ++k) through[k] = visible;
+            } else { // §9: a ray towards each lit sample; anything nearer than it shadows
+                int r = 0;
+                for (int k = 0; k < padded; ++k) {
+                    through[k] = T(0);
+                    if (n_dot_l[k] > T(0)) ray_of[r] = k, rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
+                }
+                shadow_rays += std::uint64_t(r);
                 if (s.opaque) {
-                    scene.occluded(rays, std::size_t(m), one, blocked);
-                    for (int i = 0; i < m; ++i) through[i] = blocked[i] ? T(0) : T(1);
+                    scene.occluded(rays, std::size_t(r), one, blocked);
+                    for (int t = 0; t < r; ++t) through[ray_of[t]] = blocked[t] ? T(0) : T(1);
                 } else {
-                    scene.transmittance(rays, std::size_t(m), one, through);
+                    scene.transmittance(rays, std::size_t(r), one, seen);
+                    for (int t = 0; t < r; ++t) through[ray_of[t]] = seen[t];
                 }
             }
-            for (int i = 0; i < m; ++i) diffuse_sum += through[i] * n_dot_l[i], specular_sum += through[i] * spec[i];
+            for (int b = 0; b < padded; b += W) {
+                const V visible = load(through + b);
+                diffuse_sum = lane_fma(visible, load(n_dot_l + b), diffuse_sum);
+                specular_sum = lane_fma(visible, load(spec + b), specular_sum);
+            }
         }
+    };
+    // Below this many samples the probes cost more than the rays they save (one small stream a point).
+    constexpr int probe_from = 64;
+    // §9: whether the shadow rays to the probe samples (those in even columns and rows of the
+    // strata: a quarter of them, spread over the whole rectangle) all find `expected`.
+    const auto probe_agrees = [&](T expected) {
+        std::uint32_t i = 0, j = 0;
+        for (int k0 = 0; k0 < n; k0 += chunk) {
+            const int m = std::min(chunk, n - k0), padded = (m + W - 1) / W * W;
+            place(k0, m, padded, i, j);
+            int r = 0;
+            for (int k = 0; k < m; ++k)
+                if (((column[k] | (nv > 1 ? row[k] : 0u)) & 1u) == 0u && n_dot_l[k] > T(0))
+                    rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
+            if (r == 0) continue;
+            shadow_rays += std::uint64_t(r);
+            if (s.opaque) {
+                scene.occluded(rays, std::size_t(r), one, blocked);
+                for (int t = 0; t < r; ++t)
+                    if ((blocked[t] ? T(0) : T(1)) != expected) return false;
+            } else {
+                scene.transmittance(rays, std::size_t(r), one, seen);
+                for (int t = 0; t < r; ++t)
+                    if (seen[t] != expected) return false;
+            }
+        }
+        return true;
     };
     if (!corners_first(LightSampling{n, s.adaptive, s.shadows, s.opaque})) {
         shade(T(-1));
     } else {
-        // §9: shadow rays to the rectangle's four corners first; where they agree, the samples
-        // take their value (exact for one straight occluding edge, which cuts the rectangle by a line).
+        // §9: shadow rays to the rectangle's four corners first, then (64 samples on) to a quarter of them;
+        // where all agree, the rest take their value (exact for one straight occluding edge).
         if (corners) {
-            for (int c = 0; c < 4; ++c) through[c] = corners[c];
+            for (int c = 0; c < 4; ++c) seen[c] = corners[c];
         } else {
             for (int c = 0; c < 4; ++c) rays[c] = {p.from, light_corner(light, c) - p.from};
             shadow_rays += 4u;
             if (s.opaque) {
                 scene.occluded(rays, 4u, one, blocked);
-                for (int c = 0; c < 4; ++c) through[c] = blocked[c] ? T(0) : T(1);
+                for (int c = 0; c < 4; ++c) seen[c] = blocked[c] ? T(0) : T(1);
             } else {
-                scene.transmittance(rays, 4u, one, through);
+                scene.transmittance(rays, 4u, one, seen);
             }
         }
-        const bool agree = through[0] == through[1] && through[0] == through[2] && through[0] == through[3];
-        if (agree && through[0] == T(0)) return {T(0), T(0), T(0)}; // umbra: every sample shadowed
-        shade(agree ? through[0] : T(-1));
+        const T corner = seen[0];
+        const bool agree =
+            corner == seen[1] && corner == seen[2] && corner == seen[3] && (n < probe_from || probe_agrees(corner));
+        if (agree && corner == T(0)) return {T(0), T(0), T(0)}; // umbra: every sample shadowed
+        shade(agree ? corner : T(-1));
     }
-    const T scale = T(1) / T(n); // the mean over the samples
-    return (p.kd * diffuse_sum * p.object + p.ks * specular_sum * p.highlight) * light.color *
-           scale; // §7: kd·diffuse + ks·specular, averaged
+    alignas(64) T lanes[2][std::size_t(W)];
+    detail::store_lanes(diffuse_sum, lanes[0]), detail::store_lanes(specular_sum, lanes[1]);
+    T diffuse = T(0), specular = T(0);
+    for (int k = 0; k < W; ++k) diffuse += lanes[0][k], specular += lanes[1][k];
+    return (p.kd * diffuse * p.object + p.ks * specular * p.highlight) * light.color *
+           inv_n; // §7: kd·diffuse + ks·specular, averaged
 }
 
 } // namespace isin
