@@ -4,7 +4,7 @@
 #include <limits>
 
 #include "detail/attributes.hpp"
-#include "detail/lane_pack.hpp"
+#include "simd/pack.hpp"
 #include "error_bound.hpp"
 #include "ray.hpp"
 #include "vec.hpp"

@@ -117,7 +117,7 @@ struct Shading {
 // lanes[f·stride + k]. Each hit's surface is written into its lane (hits_into_lanes,
 // surface_pass), then side_pass turns the normals to the ray's side and places the secondary
 // rays' origins, and the light passes add each light's Phong terms (§7). The renderer's streams
-// (up to stream_rays points) run the passes a register of lanes at a time (lane_pack.hpp),
+// (up to stream_rays points) run the passes a register of lanes at a time (simd/pack.hpp),
 // trace() on its one point; both round alike (lane_fma), so a point gets the same colour bit
 // for bit.
 template <class T>

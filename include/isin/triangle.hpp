@@ -7,7 +7,7 @@
 #include <utility>
 
 #include "detail/attributes.hpp"
-#include "detail/lane_pack.hpp"
+#include "simd/pack.hpp"
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "ray.hpp"
@@ -265,7 +265,7 @@ template <class T>
 ///   conservative t > 0 to its test instead (§6.8.7), which here cost 20–40% of the Bvh's speed;
 ///   the margin matters only where |P| is below the triangle's size (near the origin).
 namespace detail {
-// The formulas below run on one value (V = T) or a register of lanes (V = lane_pack.hpp's), with
+// The formulas below run on one value (V = T) or a register of lanes (V = simd/pack.hpp's), with
 // the same roundings in both: maxima as std::max(a, b) (a < b ? b : a, no NaN checks: one maxss
 // each, no branches), products added through lane_fma.
 template <class T, class V>

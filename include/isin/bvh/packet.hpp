@@ -17,7 +17,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "../detail/avx512.hpp"
+#include "../simd/avx512.hpp"
 #include "traverse.hpp"
 #include "tree.hpp"
 

@@ -11,7 +11,7 @@
 #include <limits>
 
 #include "../detail/attributes.hpp"
-#include "../detail/avx512.hpp"
+#include "../simd/avx512.hpp"
 #include "box.hpp"
 #include "triangle_block.hpp"
 

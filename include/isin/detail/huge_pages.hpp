@@ -14,8 +14,11 @@
 #include <cstddef>
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <new>
+#include <type_traits>
+#include <utility>
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -169,5 +172,54 @@ void reserve_huge_pages(Vector& v, std::size_t n) {
     v.reserve(n);
     advise_huge_pages(v.data(), v.capacity() * sizeof(*v.data()));
 }
+
+// An allocator whose value-less construct() leaves trivial values uninitialised, so that
+// resizing a vector that the build then fills in parallel does not first zero it serially; its
+// blocks of 2 MiB or more are mapped on their own, on huge pages (map_huge_pages above), and
+// taken from and given back to `kept` (a BuildContext's) when it is set.
+template <class T>
+struct UninitAllocator : std::allocator<T> {
+    KeptBlocks* kept = nullptr;
+    T* allocate(std::size_t n) {
+        if (mapped(n)) return static_cast<T*>(map_huge_pages(n * sizeof(T), kept));
+        return std::allocator<T>::allocate(n);
+    }
+    void deallocate(T* p, std::size_t n) noexcept {
+        if (mapped(n)) return unmap_huge_pages(p, n * sizeof(T), kept);
+        std::allocator<T>::deallocate(p, n);
+    }
+    // Whether a block of n values is mapped on its own: one rule for allocate and deallocate.
+    static constexpr bool mapped(std::size_t n) noexcept {
+        return maps_huge_pages && n <= std::size_t(-1) / 2 / sizeof(T) && n * sizeof(T) >= huge_page_bytes;
+    }
+    template <class U>
+    struct rebind {
+        using other = UninitAllocator<U>;
+    };
+    using is_always_equal = std::false_type; // blocks go back to the `kept` they came from
+    using propagate_on_container_copy_assignment = std::true_type;
+    using propagate_on_container_move_assignment = std::true_type;
+    using propagate_on_container_swap = std::true_type;
+    UninitAllocator() = default;
+    explicit UninitAllocator(KeptBlocks* k) noexcept : kept(k) {}
+    template <class U>
+    UninitAllocator(const UninitAllocator<U>& o) noexcept : kept(o.kept) {}
+    template <class U>
+    void construct(U* p) noexcept {
+        ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... A>
+    void construct(U* p, A&&... a) {
+        ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
+    }
+    template <class U>
+    friend bool operator==(const UninitAllocator& a, const UninitAllocator<U>& b) noexcept {
+        return a.kept == b.kept;
+    }
+    template <class U>
+    friend bool operator!=(const UninitAllocator& a, const UninitAllocator<U>& b) noexcept {
+        return a.kept != b.kept;
+    }
+};
 
 } // namespace isin::detail
