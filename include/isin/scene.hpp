@@ -256,10 +256,6 @@ struct SurfacePoint {
     Color<T> tint; ///< vertex colour interpolated by the barycentrics (white without colours)
 };
 
-/// A mesh stored in a scene (Scene::add_mesh), to place again with add_instance.
-struct MeshId {
-    std::uint32_t index;
-};
 /// A placement of a mesh in a scene (add_mesh places it once, add_instance again).
 struct InstanceId {
     std::uint32_t index;

@@ -20,7 +20,7 @@
 #include <utility>
 #include <vector>
 
-#include "../detail/file.hpp"
+#include "../io/file.hpp"
 #include "../read_limits.hpp"
 #include "triangle_bvh.hpp"
 

@@ -19,7 +19,7 @@
 
 #include "../mesh.hpp"
 #include "../indexed_mesh.hpp"
-#include "mesh_text.hpp"
+#include "parse.hpp"
 #include "polygon.hpp"
 
 namespace isin {
