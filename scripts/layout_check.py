@@ -30,7 +30,7 @@ ALLOWED = {
 
 # What exceeds a size limit today: header -> lines, (header, function name) -> lines.
 KNOWN_HEADERS = {
-    "scene.hpp": 1367,
+    "scene.hpp": 1158,
     "render.hpp": 897,
     "bvh/triangle_bvh.hpp": 870,
 }
