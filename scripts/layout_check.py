@@ -31,7 +31,6 @@ ALLOWED = {
 # What exceeds a size limit today: header -> lines, (header, function name) -> lines.
 KNOWN_HEADERS = {
     "scene.hpp": 1158,
-    "render.hpp": 897,
     "bvh/triangle_bvh.hpp": 870,
 }
 KNOWN_FUNCTIONS = {
@@ -40,7 +39,7 @@ KNOWN_FUNCTIONS = {
     ("indexed_mesh.hpp", "compute_normals"): 156,
     ("io/image_check.hpp", "check_jpeg_scans"): 210,
     ("io/ply.hpp", "ply_parse_header"): 131,
-    ("render.hpp", "trace_stream"): 136,
+    ("render/stream.hpp", "trace_stream"): 136,
 }
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
