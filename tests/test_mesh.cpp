@@ -6,8 +6,8 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
-#include "temp_dir.hpp"
+#include "support/approx.hpp"
+#include "support/temp_dir.hpp"
 
 #include <algorithm>
 #include <chrono>

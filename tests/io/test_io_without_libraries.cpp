@@ -10,7 +10,7 @@
 
 #include <doctest/doctest.h>
 
-#include "temp_dir.hpp"
+#include "../support/temp_dir.hpp"
 
 #include <stdexcept>
 #include <string>
