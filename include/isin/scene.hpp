@@ -118,14 +118,13 @@ public:
     /// with plain -O3 (SSE2); on the note's scene (3 + 2 triangles) the scalar loop wins.
     std::size_t batch_min = 8;
     /// Triangle kinds with at least this many triangles get a Bvh when the scene is committed.
-    /// Measured crossover: see benchmarks/scaling and docs/meshes.md.
+    /// The crossover: docs/meshes.md.
     std::size_t bvh_min = 64;
     /// Other kinds (spheres, users' kinds) with at least this many objects get a Bvh when the
-    /// scene is committed. Measured crossover for spheres: see benchmarks/scaling and docs/meshes.md.
+    /// scene is committed. The crossover for spheres: docs/meshes.md.
     std::size_t shape_bvh_min = 8;
     /// Leaves of other kinds' Bvhs hold at most this many objects: they are tested one at a time
-    /// (measured on spheres, vs_embree's spheres study: 2 traces 1.2-1.5× as fast as 8 from 1000
-    /// spheres to 10⁴, as fast from 10⁵ on; 1 is 5-10% faster up to 10⁴ and slower at 10⁶).
+    /// (2 traced spheres fastest over the sizes measured: docs/performance.md).
     int shape_leaf_size = 2;
     /// Overrides the choice by size for every kind. Bvh and batch apply to Möller–Trumbore
     /// scenes; the area test (triangle_method) always goes one by one.

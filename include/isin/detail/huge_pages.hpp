@@ -2,9 +2,8 @@
 /// isin — private: large blocks on huge pages (Linux transparent huge pages,
 /// `madvise(MADV_HUGEPAGE)`; Embree does the same for its builds). The Bvh build writes every
 /// byte of its arrays (primitives, nodes, leaf blocks) once, and with 4 KiB pages each page's
-/// first write is a fault: on this project's virtual machine, a third of the one-thread build
-/// time of a 1.3M-triangle mesh (vs_embree --build-only: 1180 → 710 ms with huge pages); with
-/// 2 MiB pages there are 512 times fewer. Where the kernel has them only on request ("madvise"
+/// first write is a fault, a large share of a build's time (docs/performance.md); with 2 MiB
+/// pages there are 512 times fewer. Where the kernel has them only on request ("madvise"
 /// in /sys/kernel/mm/transparent_hugepage/enabled, the default of Debian and Ubuntu) nothing
 /// else asks for them. Two ways: advise_huge_pages for a block that is already allocated (the
 /// tree's vectors), and map_huge_pages / unmap_huge_pages for the build's own blocks of 2 MiB or
@@ -46,9 +45,8 @@ inline constexpr bool maps_huge_pages = false;
 inline constexpr std::size_t huge_page_bytes = std::size_t(2) << 20;
 
 // The size mapped for a block of `bytes`: whole 2 MiB pages. Rounding to small pages instead saves
-// at most 2 MiB a block but leaves the block's last part on 4 KiB pages, and their faults cost
-// more than the rest of the build's memory: the trefoil's one-thread build 66-69 -> 79-84 ms
-// with 1200 more faults a build (blocks of 3 MiB and 19.2 MiB).
+// at most 2 MiB a block but leaves the block's last part on 4 KiB pages, whose faults cost more
+// than the memory saved (docs/performance.md).
 inline constexpr std::size_t mapped_bytes(std::size_t bytes) noexcept {
     return (bytes + huge_page_bytes - 1) & ~(huge_page_bytes - 1);
 }
@@ -69,8 +67,8 @@ inline void unmap_now(void* data, std::size_t size) noexcept;
 
 /// Freed blocks kept for the next block of the same size, up to `limit` bytes in all: the builds
 /// of a program that rebuilds (every frame, a scene's commits, a benchmark) then reuse the pages
-/// of the build before, already on huge pages, instead of the kernel zeroing fresh ones (7% of a
-/// two-thread build of the trefoil) and the first writes faulting them in again. Blocks are kept
+/// of the build before, already on huge pages, instead of the kernel zeroing fresh ones and
+/// the first writes faulting them in again. Blocks are kept
 /// by exact size only, so a kept block never serves a smaller request; one that would pass the
 /// limit or the capacity is unmapped. Owned by a BuildContext; its blocks are unmapped with it.
 class KeptBlocks {
@@ -130,8 +128,7 @@ private:
 /// Throws std::bad_alloc when the kernel has no memory for it. Why not malloc and
 /// advise_huge_pages: after the first block of a size is freed, glibc serves the next ones from
 /// its heaps (its mmap threshold adapts), whose pages were written before and so stay 4 KiB;
-/// from the second build on, the build's arrays had small pages (2-thread builds of the
-/// trefoil: 47-50 ms in steady state, 39-41 with glibc.malloc.hugetlb=1).
+/// from the second build on, the build's arrays would have small pages.
 inline void* map_huge_pages([[maybe_unused]] std::size_t bytes, [[maybe_unused]] KeptBlocks* kept = nullptr) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     constexpr std::uintptr_t huge = huge_page_bytes;
