@@ -38,7 +38,6 @@ KNOWN_FUNCTIONS = {
     ("bvh/packet.hpp", "walk_packets"): 128,
     ("indexed_mesh.hpp", "compute_normals"): 156,
     ("io/image_check.hpp", "check_jpeg_scans"): 210,
-    ("io/ply.hpp", "ply_parse_header"): 131,
     ("render/stream.hpp", "trace_stream"): 136,
 }
 
