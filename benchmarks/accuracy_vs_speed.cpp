@@ -16,7 +16,7 @@
 
 #include "batch_kernels.hpp"
 #include "methods.hpp"
-#include "../tests/common/workloads.hpp"
+#include "../tests/support/workloads.hpp"
 
 namespace {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "batch_kernels.hpp"
-#include "../tests/common/workloads.hpp"
+#include "../tests/support/workloads.hpp"
 
 namespace {
 

@@ -13,8 +13,8 @@
 //   from_file(path)      a PLY or OBJ file (isin::load_mesh), framed to fill the view around z = 45
 #include <isin/isin.hpp>
 
-#include "../tests/common/secondary.hpp"
-#include "../tests/common/workloads.hpp"
+#include "../tests/support/secondary.hpp"
+#include "../tests/support/workloads.hpp"
 
 #include <cmath>
 #include <cstddef>

@@ -2,7 +2,7 @@
 // for six offset methods side by side on the same primary hits — the raw hit point, isin's
 // hit_point unmoved, the old fixed rule (offset_origin), isin's error-bound rule
 // (offset_ray_origin on hit_point), pbrt-v4's rule re-implemented, and Wächter & Binder's
-// integer-ulp offset (float only) — on the workloads of tests/common/secondary.hpp: a trefoil
+// integer-ulp offset (float only) — on the workloads of tests/support/secondary.hpp: a trefoil
 // knot and a bumpy icosphere (Bvh), spheres with pebbles; s from 1e-3 to 1e3, 0 to 1e6 from the
 // origin, eyes 4 to 1000 radii away; float and double.
 // Prints a summary (per precision, scene, distance and method), the refraction table and the
@@ -18,7 +18,7 @@
 #include <tuple>
 #include <vector>
 
-#include "../tests/common/secondary.hpp"
+#include "../tests/support/secondary.hpp"
 
 namespace {
 

@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "../tests/common/solids.hpp"
+#include "../tests/support/solids.hpp"
 #include "embree_scene.hpp"
 #include "meshes.hpp"
 

@@ -9,6 +9,7 @@
 
 #include <isin/image.hpp>
 #include <isin/image_io.hpp>
+#include <isin/isin.hpp> // with ISIN_IMPLEMENTATION: the file code too
 #include <isin/render.hpp>
 
 #include "options.hpp"

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates isin's secondary-ray study (issue 15): builds the benchmarks (Release,
 # -march=native), runs benchmarks/offsets (six offset methods on the workloads of
-# tests/common/secondary.hpp, float and double) and draws the chart with gnuplot:
+# tests/support/secondary.hpp, float and double) and draws the chart with gnuplot:
 # docs/offsets.csv, docs/offsets.txt (the printed tables), docs/offsets.svg and docs/offsets.png.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -4,7 +4,8 @@
 #                                warnings as errors) and run, without the tests that build
 #                                programs of their own (label integration); 3.5 minutes on 2 cores.
 #   bash scripts/test.sh --all   what CI runs (.ci/run), about 35 minutes on 2 cores:
-#  1. checks the layout of every C++ file (scripts/format.sh --check, .clang-format);
+#  1. checks the layout of every C++ file (scripts/format.sh --check, .clang-format) and of the
+#     headers (scripts/layout_check.py: include cycles, folders, lengths; also a unit test);
 #  2. runs the stability, BVH, query and lane-filter tests (and the BVH stream and, at -march=native, vertex-normal tests) with g++ and clang++ at -O0 and at -O3 -march=native
 #     (their guarantees must survive any FMA contraction), on the portable path with no vector
 #     extension or intrinsic (-DISIN_FORCE_PURE=ON), on the AVX path without FMA (g++ -mavx
@@ -40,6 +41,7 @@ case "${1:-}" in
 esac
 bash scripts/deps.sh clang-format parallel libembree-dev libassimp-dev
 bash scripts/format.sh --check
+python3 scripts/layout_check.py
 # compiler | flags | extra CMake arguments
 configurations=(
   "g++|-O0|" "g++|-O3 -march=native|" "clang++|-O0|" "clang++|-O3 -march=native|"

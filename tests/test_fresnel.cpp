@@ -5,7 +5,7 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
+#include "support/approx.hpp"
 
 #include <cmath>
 

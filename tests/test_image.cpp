@@ -3,8 +3,8 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
-#include "temp_dir.hpp"
+#include "support/approx.hpp"
+#include "support/temp_dir.hpp"
 
 #include <algorithm>
 #include <cstdlib>

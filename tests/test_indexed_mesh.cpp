@@ -5,8 +5,8 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
-#include "common/solids.hpp"
+#include "support/approx.hpp"
+#include "support/solids.hpp"
 
 #include <algorithm>
 #include <array>

@@ -2,12 +2,12 @@
 // triangles, fan triangulation and winding, PLY vertex attributes, and the errors for broken or
 // hostile files.
 #include <isin/mesh.hpp>
-#include <isin/detail/ply_impl.hpp> // parse_ply_mesh: the whole Mesh a PLY file gives
+#include <isin/io/ply.hpp> // parse_ply_mesh: the whole Mesh a PLY file gives
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
-#include "temp_dir.hpp"
+#include "support/approx.hpp"
+#include "support/temp_dir.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -7,9 +7,9 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
-#include "common/workloads.hpp"
-#include "temp_dir.hpp"
+#include "support/approx.hpp"
+#include "support/workloads.hpp"
+#include "support/temp_dir.hpp"
 
 #include <cmath>
 #include <filesystem>

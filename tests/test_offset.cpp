@@ -6,7 +6,7 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
+#include "support/approx.hpp"
 
 #include <limits>
 #include <random>

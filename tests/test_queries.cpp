@@ -9,8 +9,8 @@
 #include <random>
 #include <vector>
 
-#include "common/solids.hpp"
-#include "common/workloads.hpp"
+#include "support/solids.hpp"
+#include "support/workloads.hpp"
 
 namespace {
 

@@ -3,9 +3,9 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
+#include "support/approx.hpp"
 #include "../examples/note_scene.hpp"
-#include "common/workloads.hpp"
+#include "support/workloads.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -346,7 +346,7 @@ TEST_CASE_TEMPLATE("scene: a placed mesh (its Bvh) and the same triangles one by
 
 // ---- hardening: failed threads, worker exceptions, bad indices, depth ------------------------------
 
-#include "without_threads.hpp"
+#include "support/without_threads.hpp"
 
 namespace user {
 

@@ -4,8 +4,8 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
-#include "common/workloads.hpp"
+#include "support/approx.hpp"
+#include "support/workloads.hpp"
 
 #include <array>
 #include <algorithm>

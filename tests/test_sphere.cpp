@@ -3,7 +3,7 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
+#include "support/approx.hpp"
 
 #include <cmath>
 #include <limits>

@@ -8,9 +8,9 @@
 
 #include <doctest/doctest.h>
 
-#include "common/workloads.hpp"
-#include "common/secondary.hpp"
-#include "approx.hpp"
+#include "support/workloads.hpp"
+#include "support/secondary.hpp"
+#include "support/approx.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -209,7 +209,7 @@ TEST_CASE_TEMPLATE("stability, grazing: rays down to 1e-7 rad off the plane stil
     }
 }
 
-// Secondary rays (issue 15): the workloads of tests/common/secondary.hpp — a trefoil knot and a
+// Secondary rays (issue 15): the workloads of tests/support/secondary.hpp — a trefoil knot and a
 // bumpy icosphere through a Bvh, spheres with pebbles; s = 1e-3…1e3, 0…1e6 from the origin, eyes
 // 4…1000 radii away — with the first 1000 of benchmarks/offsets' 2000 primary rays per case.
 namespace {

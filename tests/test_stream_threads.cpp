@@ -4,7 +4,7 @@
 
 #include <doctest/doctest.h>
 
-#include "common/workloads.hpp"
+#include "support/workloads.hpp"
 
 #include <cstring>
 #include <random>

@@ -4,8 +4,8 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
-#include "temp_dir.hpp"
+#include "support/approx.hpp"
+#include "support/temp_dir.hpp"
 
 #include <filesystem>
 #include <limits>

@@ -4,7 +4,7 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
+#include "support/approx.hpp"
 
 #include <cmath>
 #include <limits>

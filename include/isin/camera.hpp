@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "detail/lane_pack.hpp"
+#include "simd/pack.hpp"
 #include "ray.hpp"
 #include "vec.hpp"
 

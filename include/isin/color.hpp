@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <type_traits>
 
-#include "detail/lane_pack.hpp"
+#include "simd/pack.hpp"
 
 namespace isin {
 
@@ -96,7 +96,7 @@ template <class T>
 }
 
 /// to_byte of values[0 … n) into bytes[0 … n), a register of values at a time where the target
-/// has them (lane_pack.hpp); the same bytes. `values` is aligned to 64 bytes.
+/// has them (simd/pack.hpp); the same bytes. `values` is aligned to 64 bytes.
 template <class T>
 void to_bytes(const T* values, std::size_t n, std::uint8_t* bytes) noexcept {
     using R = detail::LaneRegister<T>;

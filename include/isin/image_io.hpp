@@ -19,7 +19,7 @@
 ///  - Reading takes regular files only (not devices, pipes or sockets) of at most
 ///    ReadLimits::max_file_bytes, and images of at most ReadLimits::max_pixels, checked from the
 ///    header before decoding; PNG and JPEG structure is checked before stb sees the data
-///    (detail/image_check.hpp), and truncated data is an error.
+///    (io/image_check.hpp), and truncated data is an error.
 ///  - PNG writing and PNG/JPEG reading need stb (Debian: libstb-dev); without it (ISIN_HAVE_STB
 ///    is 0) they throw std::runtime_error saying so, while PPM reading and writing still work.
 #include <cstddef>
@@ -48,7 +48,7 @@ void check_image_output(const std::string& path, int width, int height);
 
 /// Decodes PNG, JPEG (via stb) or binary PPM (P6, built in) data as 8-bit RGB; the format is
 /// told by the content. Safe on hostile data: the structure is checked first (see
-/// detail/image_check.hpp), the size from the header against limits.max_pixels before any
+/// io/image_check.hpp), the size from the header against limits.max_pixels before any
 /// decoding, and truncated data is an error. Throws std::runtime_error naming `name` and the
 /// reason (stb's failure reason for PNG/JPEG it refuses).
 [[nodiscard]] Image read_image_from_memory(const void* data, std::size_t size, const ReadLimits& limits = {},
@@ -59,7 +59,3 @@ void check_image_output(const std::string& path, int width, int height);
 [[nodiscard]] Image read_image(const std::string& path, const ReadLimits& limits = {});
 
 } // namespace isin
-
-#if defined(ISIN_IMPLEMENTATION)
-#include "detail/image_io_impl.hpp"
-#endif

@@ -315,4 +315,9 @@ void compute_normals(Mesh<T>& mesh, std::common_type_t<T> crease_angle_degrees =
     mesh.normals = std::move(normals);
 }
 
+/// A mesh stored in a scene (Scene::add_mesh), to place again with add_instance.
+struct MeshId {
+    std::uint32_t index;
+};
+
 } // namespace isin

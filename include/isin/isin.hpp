@@ -54,8 +54,11 @@
 #include "vec.hpp"
 #include "version.hpp"
 
-// Bvh::save, load and load_from_memory are file code, compiled once like the readers: in the
-// ISIN_IMPLEMENTATION file (CMake's isin::io), or where bvh/serialize.hpp is included.
+// The file code (io/: the readers, the image files, stb, tinyobjloader) and Bvh::save, load and
+// load_from_memory, compiled once: in the ISIN_IMPLEMENTATION file (CMake's isin::io), or, for
+// the Bvh's, where bvh/serialize.hpp is included.
 #if defined(ISIN_IMPLEMENTATION)
 #include "bvh/serialize.hpp"
+#include "io/image_impl.hpp"
+#include "io/mesh_impl.hpp"
 #endif

@@ -88,7 +88,3 @@ ISIN_DETAIL_MESH_IO(double)
 #undef ISIN_DETAIL_MESH_IO
 
 } // namespace isin
-
-#if defined(ISIN_IMPLEMENTATION)
-#include "detail/mesh_io_impl.hpp"
-#endif

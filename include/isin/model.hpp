@@ -40,8 +40,8 @@
 
 #include "indexed_mesh.hpp"
 #include "mesh.hpp"
+#include "bvh/tree.hpp"
 #include "read_limits.hpp"
-#include "scene.hpp"
 #include "shading.hpp"
 #include "texture.hpp"
 
@@ -98,7 +98,10 @@ ISIN_DETAIL_MODEL_IO(float)
 ISIN_DETAIL_MODEL_IO(double)
 #undef ISIN_DETAIL_MODEL_IO
 
-/// Adds `model` to `scene`: its textures, its materials (texture indices moved along), and each
+template <class T, template <class> class... Shapes>
+class Scene;
+
+/// Adds `model` to `scene` (include scene.hpp, or isin.hpp, to call it): its textures, its materials (texture indices moved along), and each
 /// mesh placed once where it stands (Scene::add_mesh). Returns the meshes' ids, for
 /// add_instance. Throws as add_mesh does.
 template <class T, template <class> class... S>
@@ -119,7 +122,3 @@ std::vector<MeshId> add_model(Scene<T, S...>& scene, const Model<T>& model, cons
 }
 
 } // namespace isin
-
-#if defined(ISIN_IMPLEMENTATION)
-#include "detail/mesh_io_impl.hpp"
-#endif

@@ -4,7 +4,7 @@
 #include <limits>
 
 #include "detail/attributes.hpp"
-#include "detail/lane_pack.hpp"
+#include "simd/pack.hpp"
 #include "error_bound.hpp"
 #include "ray.hpp"
 #include "vec.hpp"
@@ -18,10 +18,10 @@ namespace isin {
 /// it moves by 256ε times that (never less than 256ε/32, so that points at the origin move too).
 /// A fixed distance instead (1e-4, say) is too small far from the origin and too large for small
 /// objects. Returns p unchanged when p or n is not finite.
-/// Its cost, measured by the secondary-ray study (scripts/offsets.sh): origins move ~1400× further
-/// than `offset_ray_origin`'s near the origin and 57–170× from 1e3 out (medians); in float, 27–40%
-/// of the shadow rays' occluders are lost from 1e3 out, and refracted rays start beyond spheres up
-/// to 64 ulps wide. Prefer `offset_ray_origin` with a `hit_point`.
+/// Its cost (the secondary-ray study, scripts/offsets.sh, docs/accuracy.md): origins move orders
+/// of magnitude further than `offset_ray_origin`'s, shadow rays lose occluders far from the origin
+/// in float, and refracted rays start beyond thin spheres. Prefer `offset_ray_origin` with a
+/// `hit_point`.
 template <class T>
 [[nodiscard]] inline Vertex<T> offset_origin(const Vertex<T>& p, const Vertex<T>& n, T scale = T(0)) noexcept {
     if (!is_finite(p) || !is_finite(n)) return p;

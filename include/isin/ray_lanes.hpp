@@ -1,7 +1,7 @@
 #pragma once
 /// isin — many rays against one primitive at once: rays × primitives in lanes, for scenes too
 /// small for a Bvh (the note's 5 triangles and 2 spheres), a register of rays at a time
-/// (AVX-512 or AVX, written once for one ray or a register: detail/lane_pack.hpp; one ray at a
+/// (AVX-512 or AVX, written once for one ray or a register: simd/pack.hpp; one ray at a
 /// time elsewhere). Two kinds of test:
 /// - `hit_lanes`, for triangles (Möller–Trumbore) and spheres (§6): the exact test, each lane
 ///   deciding and computing t, u, v with intersect_moller_trumbore's and intersect's operations,
@@ -34,7 +34,7 @@
 #include <type_traits>
 
 #include "detail/attributes.hpp"
-#include "detail/lane_pack.hpp"
+#include "simd/pack.hpp"
 #include "error_bound.hpp"
 #include "ray.hpp"
 #include "sphere.hpp"
@@ -112,7 +112,7 @@ constexpr T lane_floor = T(64) * std::numeric_limits<T>::min();
 
 namespace detail {
 /// The bits of the rays of `lanes` that `keep(ox, oy, oz, dx, dy, dz, dmax)` keeps: a register of
-/// lanes at a time where the target has them (lane_pack.hpp), else ray by ray.
+/// lanes at a time where the target has them (simd/pack.hpp), else ray by ray.
 template <class T, class Keep>
 [[nodiscard]] std::uint64_t filter_lanes(const RayLanes<T>& lanes, const Keep& keep) noexcept {
 #if defined(ISIN_DETAIL_LANE_PACKS)

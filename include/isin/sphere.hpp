@@ -3,7 +3,7 @@
 #include <limits>
 
 #include "detail/attributes.hpp"
-#include "detail/lane_pack.hpp"
+#include "simd/pack.hpp"
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "ray.hpp"
@@ -39,7 +39,7 @@ template <class T>
 }
 
 namespace detail {
-/// A sphere hit's surface for one value (V = T) or a register of lanes (lane_pack.hpp), rounded
+/// A sphere hit's surface for one value (V = T) or a register of lanes (simd/pack.hpp), rounded
 /// alike in both (lane_fma, lane_dot): from the ray's origin o and direction d, the sphere's
 /// centre c and radius r and the hit's t, the offset from the centre P − C = (o − c) + t·d
 /// (offset_from_center), the unit normal along it (normal_at), and hit_point's point

@@ -7,7 +7,7 @@
 #include <utility>
 
 #include "detail/attributes.hpp"
-#include "detail/lane_pack.hpp"
+#include "simd/pack.hpp"
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "ray.hpp"
@@ -73,8 +73,8 @@ template <class T>
 namespace detail {
 /// True when the edges e1, e2 span no area: |e1 × e2| lies within the rounding noise of the cross
 /// product (sin of the angle between the edges below ~8ε). Scale-free, overflow-free in max norm.
-/// Always inlined: clang -O2 called it from Möller–Trumbore's hit path, and the note's scene
-/// rendered 1.16× slower for it (42.3–44.0 against 36.6–36.9 ms).
+/// Always inlined: clang -O2 called it from Möller–Trumbore's hit path, which slowed the note's
+/// scene (docs/performance.md).
 template <class T>
 [[nodiscard]] ISIN_DETAIL_INLINE bool is_degenerate(const Vertex<T>& e1, const Vertex<T>& e2,
                                                     const Vertex<T>& N) noexcept {
@@ -262,10 +262,10 @@ template <class T>
 /// - γ₇·(|b0·V0| + |b1·V1| + |b2·V2|): the point's own rounding (pbrt-v4 §6.8.5), and
 /// - γ₃₂·L³/|N|∞ (L the longest edge, N the §2 normal, in max norm): how far from the plane a
 ///   triangle test, computing from a ray origin on the triangle, may place it. pbrt-v4 adds a
-///   conservative t > 0 to its test instead (§6.8.7), which here cost 20–40% of the Bvh's speed;
+///   conservative t > 0 to its test instead (§6.8.7), which here cost much of the Bvh's speed;
 ///   the margin matters only where |P| is below the triangle's size (near the origin).
 namespace detail {
-// The formulas below run on one value (V = T) or a register of lanes (V = lane_pack.hpp's), with
+// The formulas below run on one value (V = T) or a register of lanes (V = simd/pack.hpp's), with
 // the same roundings in both: maxima as std::max(a, b) (a < b ? b : a, no NaN checks: one maxss
 // each, no branches), products added through lane_fma.
 template <class T, class V>

@@ -2,8 +2,8 @@
 // PPM) with the default limits. A std::runtime_error is the defined answer to bad data; any
 // other exception, a crash, a sanitizer report, a hang or an allocation beyond libFuzzer's
 // limits is a finding.
-#define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
 #include <isin/image_io.hpp>
+#include <isin/io/image_impl.hpp> // the file code, and stb, compiled here
 
 #include <cstddef>
 #include <cstdint>

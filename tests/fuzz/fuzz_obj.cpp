@@ -4,9 +4,9 @@
 // "mtllib model.mtl"), model.mtl and tex.png, so that .mtl files and textures are read from
 // files as an upload's would be. isin::MeshError is the defined answer to bad data; anything
 // else is a finding.
-#define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
 #include <isin/mesh.hpp>
 #include <isin/model.hpp>
+#include <isin/io/mesh_impl.hpp> // the file code, with stb and tinyobjloader, compiled here
 
 #include <cstddef>
 #include <cstdint>

@@ -1,9 +1,9 @@
 // libFuzzer target: the PLY reader through isin::load_mesh_from_memory (float) and
 // isin::load_model_from_memory (double, normals computed). isin::MeshError is the defined answer
 // to bad data; anything else is a finding.
-#define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
 #include <isin/mesh.hpp>
 #include <isin/model.hpp>
+#include <isin/io/mesh_impl.hpp> // the file code, with stb and tinyobjloader, compiled here
 
 #include <cstddef>
 #include <cstdint>

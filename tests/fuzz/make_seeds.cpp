@@ -3,9 +3,9 @@
 //   make_seeds DIR   →   DIR/image (PNG of every colour type and depth, interlaced or not, JPEG,
 //                        PPM), DIR/ply (ASCII and binary, every property type), DIR/obj (one a model
 //                        with its .mtl and texture, for fuzz_obj), DIR/bvh (saved Bvhs, float and double)
-#define ISIN_IMPLEMENTATION // the file code, and stb, compiled here
 #include <isin/bvh/serialize.hpp>
 #include <isin/image_io.hpp>
+#include <isin/io/image_impl.hpp> // the file code, and stb, compiled here
 
 #include <cstdint>
 #include <cstdio>

@@ -56,10 +56,8 @@ struct BinaryNode {
 // allocation; all freed with the pool). Blocks double from about the thread's share of the
 // nodes' expected number up to `largest`, so small builds stay small, and large ones get blocks
 // of 2 MiB or more, mapped on huge pages of their own like the build's other arrays
-// (UninitAllocator, detail/huge_pages.hpp). Before: two malloc'ed nodes per split, 4 KiB pages
-// in each thread's own heap, handed back to the kernel between builds and faulted in again
-// (2-thread builds of the trefoil: 50-60 ms, against 40-41 with glibc's malloc on huge pages,
-// GLIBC_TUNABLES=glibc.malloc.hugetlb=1).
+// (UninitAllocator, detail/huge_pages.hpp); two malloc'ed nodes per split would sit on 4 KiB
+// pages in each thread's own heap, handed back to the kernel between builds and faulted in again.
 template <class T>
 class alignas(64) NodePool { // 64: the build threads' pools never share a cache line
 public:
@@ -201,13 +199,11 @@ private:
     // The binary build splits by SAH down to this depth, and at the median below it, so the tree
     // is at most sah_depth + 32 levels deep for any input (the traversal stack is sized by it).
     static constexpr int sah_depth = BvhTree<T>::depth_limit - 32;
-    static constexpr int bins = 8; // 16 or 32 trace no faster on the vs_embree meshes and build 20-40% slower
+    static constexpr int bins = 8; // more bins trace no faster and build slower (docs/performance.md)
     // Ranges of this many primitives or more are binned into two sets of bins, alternate
     // primitives, merged after (the same bins): neighbours in a coherent mesh often fall in the
-    // same bins, and with one set each bin's update waits for the one before. Measured: up to
-    // 5-11% faster one-thread builds of the trefoil, the terrain and the 80k icosphere, none on
-    // the random soup; for all nodes (from 2 primitives) the small nodes' extra set of bins
-    // cost more than it saved.
+    // same bins, and with one set each bin's update waits for the one before. Small nodes' extra
+    // set of bins costs more than it saves (docs/performance.md).
     static constexpr std::uint32_t two_bin_sets_min = 1024;
     // The partition looks at the sides of this many first primitives of a node, and goes
     // without branches when a quarter of neighbours or more change side (see split). Measured:
@@ -336,8 +332,7 @@ private:
         }
         // Up to leaf_size triangles cost one 8-lane test as a leaf, as each child would: split
         // only when the two children's boxes together have well under this box's area (the
-        // ratio measured on the vs_embree meshes: 0.5 to 0.7 trace alike, 1.0 builds 40% longer
-        // for no gain, per-triangle SAH costs likewise).
+        // ratio: the middle of the range whose trees trace alike, docs/performance.md).
         constexpr T split_area_ratio = T(0.6);
         if (count <= std::uint32_t(leaf_size_) && !(best_areas < split_area_ratio * box.area())) return false;
 

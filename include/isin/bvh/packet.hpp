@@ -17,7 +17,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "../detail/avx512.hpp"
+#include "../simd/avx512.hpp"
 #include "traverse.hpp"
 #include "tree.hpp"
 
@@ -470,7 +470,7 @@ inline unsigned make_packet(RayPacket& p, const float (&c)[6][RayPacket::size], 
 // One axis of packet_hit_boxes: the entry and exit bounds of the boxes' slabs (planes near and
 // far) raise tn and lower tf. A function, always inlined with packet_hit_boxes and
 // packet_hit_children: written as a lambda, g++ left it out of line once the stream code around
-// walk_packet grew, and the terrain's camera rays ran 10-19% slower.
+// walk_packet grew, which slowed camera rays (docs/performance.md).
 // The entry (p − o)·inv − margin is least at one end of inv's range (the sign of p − o says
 // which), the exit greatest at one end of inv_far's: each end in one FMA, p·inv − (o·inv ±
 // margin) with the parenthesis made by make_packet.

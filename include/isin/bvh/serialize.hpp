@@ -22,7 +22,7 @@
 #include <utility>
 #include <vector>
 
-#include "../detail/file.hpp"
+#include "../io/file.hpp"
 #include "../read_limits.hpp"
 #include "triangle_bvh.hpp"
 

@@ -88,7 +88,8 @@ template <bool cull>
 } // namespace detail
 } // namespace isin
 
-#include "triangles_avx2.hpp" // the AVX2 + FMA form, where the target has both
+#include "triangles_avx2.hpp"   // the AVX2 + FMA form, where the target has both
+#include "triangles_avx512.hpp" // the AVX-512 form of pairs and packets, where the target has it
 
 namespace isin {
 namespace detail {

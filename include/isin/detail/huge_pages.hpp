@@ -2,9 +2,8 @@
 /// isin — private: large blocks on huge pages (Linux transparent huge pages,
 /// `madvise(MADV_HUGEPAGE)`; Embree does the same for its builds). The Bvh build writes every
 /// byte of its arrays (primitives, nodes, leaf blocks) once, and with 4 KiB pages each page's
-/// first write is a fault: on this project's virtual machine, a third of the one-thread build
-/// time of a 1.3M-triangle mesh (vs_embree --build-only: 1180 → 710 ms with huge pages); with
-/// 2 MiB pages there are 512 times fewer. Where the kernel has them only on request ("madvise"
+/// first write is a fault, a large share of a build's time (docs/performance.md); with 2 MiB
+/// pages there are 512 times fewer. Where the kernel has them only on request ("madvise"
 /// in /sys/kernel/mm/transparent_hugepage/enabled, the default of Debian and Ubuntu) nothing
 /// else asks for them. Two ways: advise_huge_pages for a block that is already allocated (the
 /// tree's vectors), and map_huge_pages / unmap_huge_pages for the build's own blocks of 2 MiB or
@@ -14,8 +13,11 @@
 #include <cstddef>
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <new>
+#include <type_traits>
+#include <utility>
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -43,9 +45,8 @@ inline constexpr bool maps_huge_pages = false;
 inline constexpr std::size_t huge_page_bytes = std::size_t(2) << 20;
 
 // The size mapped for a block of `bytes`: whole 2 MiB pages. Rounding to small pages instead saves
-// at most 2 MiB a block but leaves the block's last part on 4 KiB pages, and their faults cost
-// more than the rest of the build's memory: the trefoil's one-thread build 66-69 -> 79-84 ms
-// with 1200 more faults a build (blocks of 3 MiB and 19.2 MiB).
+// at most 2 MiB a block but leaves the block's last part on 4 KiB pages, whose faults cost more
+// than the memory saved (docs/performance.md).
 inline constexpr std::size_t mapped_bytes(std::size_t bytes) noexcept {
     return (bytes + huge_page_bytes - 1) & ~(huge_page_bytes - 1);
 }
@@ -66,8 +67,8 @@ inline void unmap_now(void* data, std::size_t size) noexcept;
 
 /// Freed blocks kept for the next block of the same size, up to `limit` bytes in all: the builds
 /// of a program that rebuilds (every frame, a scene's commits, a benchmark) then reuse the pages
-/// of the build before, already on huge pages, instead of the kernel zeroing fresh ones (7% of a
-/// two-thread build of the trefoil) and the first writes faulting them in again. Blocks are kept
+/// of the build before, already on huge pages, instead of the kernel zeroing fresh ones and
+/// the first writes faulting them in again. Blocks are kept
 /// by exact size only, so a kept block never serves a smaller request; one that would pass the
 /// limit or the capacity is unmapped. Owned by a BuildContext; its blocks are unmapped with it.
 class KeptBlocks {
@@ -127,8 +128,7 @@ private:
 /// Throws std::bad_alloc when the kernel has no memory for it. Why not malloc and
 /// advise_huge_pages: after the first block of a size is freed, glibc serves the next ones from
 /// its heaps (its mmap threshold adapts), whose pages were written before and so stay 4 KiB;
-/// from the second build on, the build's arrays had small pages (2-thread builds of the
-/// trefoil: 47-50 ms in steady state, 39-41 with glibc.malloc.hugetlb=1).
+/// from the second build on, the build's arrays would have small pages.
 inline void* map_huge_pages([[maybe_unused]] std::size_t bytes, [[maybe_unused]] KeptBlocks* kept = nullptr) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     constexpr std::uintptr_t huge = huge_page_bytes;
@@ -169,5 +169,54 @@ void reserve_huge_pages(Vector& v, std::size_t n) {
     v.reserve(n);
     advise_huge_pages(v.data(), v.capacity() * sizeof(*v.data()));
 }
+
+// An allocator whose value-less construct() leaves trivial values uninitialised, so that
+// resizing a vector that the build then fills in parallel does not first zero it serially; its
+// blocks of 2 MiB or more are mapped on their own, on huge pages (map_huge_pages above), and
+// taken from and given back to `kept` (a BuildContext's) when it is set.
+template <class T>
+struct UninitAllocator : std::allocator<T> {
+    KeptBlocks* kept = nullptr;
+    T* allocate(std::size_t n) {
+        if (mapped(n)) return static_cast<T*>(map_huge_pages(n * sizeof(T), kept));
+        return std::allocator<T>::allocate(n);
+    }
+    void deallocate(T* p, std::size_t n) noexcept {
+        if (mapped(n)) return unmap_huge_pages(p, n * sizeof(T), kept);
+        std::allocator<T>::deallocate(p, n);
+    }
+    // Whether a block of n values is mapped on its own: one rule for allocate and deallocate.
+    static constexpr bool mapped(std::size_t n) noexcept {
+        return maps_huge_pages && n <= std::size_t(-1) / 2 / sizeof(T) && n * sizeof(T) >= huge_page_bytes;
+    }
+    template <class U>
+    struct rebind {
+        using other = UninitAllocator<U>;
+    };
+    using is_always_equal = std::false_type; // blocks go back to the `kept` they came from
+    using propagate_on_container_copy_assignment = std::true_type;
+    using propagate_on_container_move_assignment = std::true_type;
+    using propagate_on_container_swap = std::true_type;
+    UninitAllocator() = default;
+    explicit UninitAllocator(KeptBlocks* k) noexcept : kept(k) {}
+    template <class U>
+    UninitAllocator(const UninitAllocator<U>& o) noexcept : kept(o.kept) {}
+    template <class U>
+    void construct(U* p) noexcept {
+        ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... A>
+    void construct(U* p, A&&... a) {
+        ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
+    }
+    template <class U>
+    friend bool operator==(const UninitAllocator& a, const UninitAllocator<U>& b) noexcept {
+        return a.kept == b.kept;
+    }
+    template <class U>
+    friend bool operator!=(const UninitAllocator& a, const UninitAllocator<U>& b) noexcept {
+        return a.kept != b.kept;
+    }
+};
 
 } // namespace isin::detail

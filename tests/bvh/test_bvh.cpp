@@ -4,10 +4,10 @@
 
 #include <doctest/doctest.h>
 
-#include "approx.hpp"
-#include "common/workloads.hpp"
+#include "../support/approx.hpp"
+#include "../support/workloads.hpp"
 
-#include "without_threads.hpp"
+#include "../support/without_threads.hpp"
 
 #include <atomic>
 #include <cmath>

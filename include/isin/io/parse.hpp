@@ -1,6 +1,6 @@
 #pragma once
 /// isin — private: what the mesh readers share (errors, the whole-file read, number parsing and
-/// checking), for detail/obj_impl.hpp and detail/ply_impl.hpp.
+/// checking), for io/obj.hpp and io/ply.hpp.
 #include <algorithm>
 #include <array>
 #include <cerrno>

@@ -22,10 +22,11 @@
 #include "../model.hpp"
 #include "../read_limits.hpp"
 #include "../triangle.hpp"
-#include "mesh_text.hpp"
+#include "image_impl.hpp"
 #include "model_files.hpp"
-#include "obj_impl.hpp"
-#include "ply_impl.hpp"
+#include "obj.hpp"
+#include "parse.hpp"
+#include "ply.hpp"
 
 namespace isin {
 

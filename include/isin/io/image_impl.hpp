@@ -197,7 +197,7 @@ void check_image_output(const std::string& path, int width, int height) {
 
 /// Decodes PNG, JPEG (via stb) or binary PPM (P6, built in) data as 8-bit RGB; the format is
 /// told by the content. Safe on hostile data: the structure is checked first (see
-/// detail/image_check.hpp), the size from the header against limits.max_pixels before any
+/// io/image_check.hpp), the size from the header against limits.max_pixels before any
 /// decoding, and truncated data is an error. Throws std::runtime_error naming `name` and the
 /// reason (stb's failure reason for PNG/JPEG it refuses).
 Image read_image_from_memory(const void* data, std::size_t size, const ReadLimits& limits,

@@ -5,7 +5,7 @@
 
 #include <doctest/doctest.h>
 
-#include "common/workloads.hpp"
+#include "../support/workloads.hpp"
 
 #include <cmath>
 #include <cstdint>

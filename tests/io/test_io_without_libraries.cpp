@@ -3,13 +3,14 @@
 // error naming its Debian package): PPM and PLY still work, PNG, JPEG and OBJ say what to install.
 #define ISIN_HAVE_STB 0
 #define ISIN_HAVE_TINYOBJLOADER 0
-#define ISIN_IMPLEMENTATION
 #include <isin/image_io.hpp>
+#include <isin/io/image_impl.hpp>
+#include <isin/io/mesh_impl.hpp>
 #include <isin/mesh.hpp>
 
 #include <doctest/doctest.h>
 
-#include "temp_dir.hpp"
+#include "../support/temp_dir.hpp"
 
 #include <stdexcept>
 #include <string>

@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "../mesh.hpp"
-#include "mesh_text.hpp"
+#include "parse.hpp"
 #include "file.hpp"
 #include "model_files.hpp"
 #include "polygon.hpp"

@@ -19,7 +19,7 @@
 
 #include "../mesh.hpp"
 #include "../indexed_mesh.hpp"
-#include "mesh_text.hpp"
+#include "parse.hpp"
 #include "polygon.hpp"
 
 namespace isin {
@@ -165,6 +165,33 @@ inline void ply_mark_attributes(PlyElement& el, PlyHeader& h) {
     }
 }
 
+/// Checks the elements isin reads: `vertex` has x, y and z and at most 2^32 − 1 instances (its
+/// attributes then marked), `face` its index list.
+inline void ply_check_elements(const char* who, const std::string& path, PlyHeader& h) {
+    for (PlyElement& el : h.elements) {
+        const auto has = [&](PlyRole role) {
+            for (const PlyProperty& p : el.properties)
+                if (p.role == role) return true;
+            return false;
+        };
+        const std::string at = "line " + std::to_string(el.line) + ": element '" + el.name + "' has no ";
+        if (el.name == "vertex") {
+            if (!has(PlyRole::x)) throw mesh_error(who, path, at + "property x");
+            if (!has(PlyRole::y)) throw mesh_error(who, path, at + "property y");
+            if (!has(PlyRole::z)) throw mesh_error(who, path, at + "property z");
+            if (el.count > std::numeric_limits<std::uint32_t>::max())
+                throw mesh_error(who, path,
+                                 "line " + std::to_string(el.line) + ": element 'vertex' declares " +
+                                     std::to_string(el.count) +
+                                     " vertices; isin's 32-bit indices address at most 2^32 - 1 = 4294967295");
+            h.vertex_count = el.count;
+            ply_mark_attributes(el, h);
+        }
+        if (el.name == "face" && !has(PlyRole::indices))
+            throw mesh_error(who, path, at + "list property vertex_indices");
+    }
+}
+
 /// Parses the header and marks the properties isin reads (x, y, z and the attributes of
 /// `vertex`, the index list of `face`). Unknown keywords after the format line are skipped.
 [[nodiscard]] inline PlyHeader ply_parse_header(const char* who, const std::string& path, std::string_view file) {
@@ -274,28 +301,7 @@ inline void ply_mark_attributes(PlyElement& el, PlyHeader& h) {
     if (!have_format) throw fail("header has no format line");
     h.data_offset = pos;
     h.data_line = line + 1;
-    for (PlyElement& el : h.elements) {
-        const auto has = [&](PlyRole role) {
-            for (const PlyProperty& p : el.properties)
-                if (p.role == role) return true;
-            return false;
-        };
-        const std::string at = "line " + std::to_string(el.line) + ": element '" + el.name + "' has no ";
-        if (el.name == "vertex") {
-            if (!has(PlyRole::x)) throw mesh_error(who, path, at + "property x");
-            if (!has(PlyRole::y)) throw mesh_error(who, path, at + "property y");
-            if (!has(PlyRole::z)) throw mesh_error(who, path, at + "property z");
-            if (el.count > std::numeric_limits<std::uint32_t>::max())
-                throw mesh_error(who, path,
-                                 "line " + std::to_string(el.line) + ": element 'vertex' declares " +
-                                     std::to_string(el.count) +
-                                     " vertices; isin's 32-bit indices address at most 2^32 - 1 = 4294967295");
-            h.vertex_count = el.count;
-            ply_mark_attributes(el, h);
-        }
-        if (el.name == "face" && !has(PlyRole::indices))
-            throw mesh_error(who, path, at + "list property vertex_indices");
-    }
+    ply_check_elements(who, path, h);
     return h;
 }
 

@@ -1,7 +1,7 @@
-// Polygons into triangles (detail/polygon.hpp): the fan for convex polygons, ear clipping for
+// Polygons into triangles (io/polygon.hpp): the fan for convex polygons, ear clipping for
 // concave ones and keyholes in any plane and either winding, defined results for degenerate
 // input, and retriangulate_fans on a reader's index buffer.
-#include <isin/detail/polygon.hpp>
+#include <isin/io/polygon.hpp>
 
 #include <doctest/doctest.h>
 

@@ -6,8 +6,8 @@
 
 #include <doctest/doctest.h>
 
-#include "common/workloads.hpp"
-#include "temp_dir.hpp"
+#include "../support/workloads.hpp"
+#include "../support/temp_dir.hpp"
 
 #include <algorithm>
 #include <cmath>
