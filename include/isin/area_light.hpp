@@ -12,7 +12,7 @@
 #include <type_traits>
 
 #include "color.hpp"
-#include "detail/lane_pack.hpp"
+#include "simd/pack.hpp"
 #include "ray.hpp"
 #include "shading.hpp"
 #include "vec.hpp"
@@ -155,6 +155,32 @@ struct LightSampling {
     return s.adaptive && s.shadows && s.samples >= 8;
 }
 
+namespace detail {
+/// The sum of a register's lanes, lane 0 first.
+template <class T, class V>
+[[nodiscard]] T lane_total(const V& lanes) noexcept {
+    alignas(64) T a[LaneRegister<T>::width];
+    store_lanes(lanes, a);
+    T sum = T(0);
+    for (const T x : a) sum += x;
+    return sum;
+}
+
+/// What shadow rays 0 … count − 1 from a point let through, into visible[]: 1 or 0 past opaque
+/// occluders (scene.occluded), else the scene's transmittance. `one` holds count ones.
+template <class T, class SceneT>
+void shadow_visibility(const SceneT& scene, const Ray<T>* rays, std::size_t count, bool opaque, const T* one,
+                       T* visible) {
+    if (!opaque) return scene.transmittance(rays, count, one, visible);
+    std::uint8_t blocked[64];
+    for (std::size_t first = 0; first < count; first += 64) {
+        const std::size_t m = std::min<std::size_t>(64, count - first);
+        scene.occluded(rays + first, m, one + first, blocked);
+        for (std::size_t t = 0; t < m; ++t) visible[first + t] = blocked[t] ? T(0) : T(1);
+    }
+}
+} // namespace detail
+
 /// The mean over the rectangle of `light` of a PointLight's Phong term (§7) at p, shadows
 /// included (§9), estimated from s.samples stratified samples seeded by `seed`: the colour it adds
 /// to p's local colour. Shadow rays go to `scene` as a stream (occluded, or transmittance unless
@@ -187,7 +213,6 @@ template <class T, class SceneT>
     std::uint32_t column[chunk], row[chunk];
     Ray<T> rays[chunk];
     int ray_of[chunk]; // each shadow ray's sample
-    std::uint8_t blocked[chunk];
     for (T& t : one) t = T(1);
     V diffuse_sum = V(T(0)), specular_sum = V(T(0));
     const auto load = [](const T* a) { return detail::load_lanes<T, V>(a); };
@@ -236,13 +261,8 @@ template <class T, class SceneT>
                     if (n_dot_l[k] > T(0)) ray_of[r] = k, rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
                 }
                 shadow_rays += std::uint64_t(r);
-                if (s.opaque) {
-                    scene.occluded(rays, std::size_t(r), one, blocked);
-                    for (int t = 0; t < r; ++t) through[ray_of[t]] = blocked[t] ? T(0) : T(1);
-                } else {
-                    scene.transmittance(rays, std::size_t(r), one, seen);
-                    for (int t = 0; t < r; ++t) through[ray_of[t]] = seen[t];
-                }
+                detail::shadow_visibility(scene, rays, std::size_t(r), s.opaque, one, seen);
+                for (int t = 0; t < r; ++t) through[ray_of[t]] = seen[t];
             }
             for (int b = 0; b < padded; b += W) {
                 const V visible = load(through + b);
@@ -266,15 +286,9 @@ template <class T, class SceneT>
                     rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
             if (r == 0) continue;
             shadow_rays += std::uint64_t(r);
-            if (s.opaque) {
-                scene.occluded(rays, std::size_t(r), one, blocked);
-                for (int t = 0; t < r; ++t)
-                    if ((blocked[t] ? T(0) : T(1)) != expected) return false;
-            } else {
-                scene.transmittance(rays, std::size_t(r), one, seen);
-                for (int t = 0; t < r; ++t)
-                    if (seen[t] != expected) return false;
-            }
+            detail::shadow_visibility(scene, rays, std::size_t(r), s.opaque, one, seen);
+            for (int t = 0; t < r; ++t)
+                if (seen[t] != expected) return false;
         }
         return true;
     };
@@ -288,12 +302,7 @@ template <class T, class SceneT>
         } else {
             for (int c = 0; c < 4; ++c) rays[c] = {p.from, light_corner(light, c) - p.from};
             shadow_rays += 4u;
-            if (s.opaque) {
-                scene.occluded(rays, 4u, one, blocked);
-                for (int c = 0; c < 4; ++c) seen[c] = blocked[c] ? T(0) : T(1);
-            } else {
-                scene.transmittance(rays, 4u, one, seen);
-            }
+            detail::shadow_visibility(scene, rays, 4u, s.opaque, one, seen);
         }
         const T corner = seen[0];
         const bool agree =
@@ -301,10 +310,7 @@ template <class T, class SceneT>
         if (agree && corner == T(0)) return {T(0), T(0), T(0)}; // umbra: every sample shadowed
         shade(agree ? corner : T(-1));
     }
-    alignas(64) T lanes[2][std::size_t(W)];
-    detail::store_lanes(diffuse_sum, lanes[0]), detail::store_lanes(specular_sum, lanes[1]);
-    T diffuse = T(0), specular = T(0);
-    for (int k = 0; k < W; ++k) diffuse += lanes[0][k], specular += lanes[1][k];
+    const T diffuse = detail::lane_total<T>(diffuse_sum), specular = detail::lane_total<T>(specular_sum);
     return (p.kd * diffuse * p.object + p.ks * specular * p.highlight) * light.color *
            inv_n; // §7: kd·diffuse + ks·specular, averaged
 }

@@ -20,7 +20,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "bvh/query_lanes.hpp"
+#include "simd/sqrt.hpp"
 #include "bvh/triangle_bvh.hpp"
 #include "detail/parallel.hpp"
 #include "indexed_mesh.hpp"

@@ -12,7 +12,7 @@
 
 #include "../detail/parallel.hpp"
 #include "../point_hit.hpp"
-#include "query_lanes.hpp"
+#include "../simd/sqrt.hpp"
 #include "tree.hpp"
 #include "triangles.hpp"
 

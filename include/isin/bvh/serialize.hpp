@@ -218,22 +218,16 @@ public:
         return out;
     }
 
-    /// The Bvh in the `size` bytes `source` holds (MemorySource, FileSource), a file named `name`
-    /// in messages; throws BvhFileError. The file's parts are read straight into the Bvh's arrays
-    /// (padded records through a buffer of one piece), each piece summed and checked in cache.
-    template <class Source>
-    [[nodiscard]] static Bvh<T> decode(Source& source, std::uint64_t size, const std::string& name,
-                                       const ReadLimits& limits) {
-        const auto fail = [&name](const std::string& what) {
-            return BvhFileError("isin Bvh file " + name + ": " + what);
-        };
-        if (!detail::file_too_large(size, limits).empty()) throw fail(detail::file_too_large(size, limits));
-        if (size == 0) throw fail("is empty");
-        unsigned char data[header_bytes] = {};
-        const auto read = [&](void* to, std::size_t n) {
-            if (!source.read(to, n)) throw fail(source.error.empty() ? "truncated while it was read" : source.error);
-        };
-        read(data, std::size_t(std::min<std::uint64_t>(size, header_bytes)));
+    // What a file's header says, once checked against itself and the file's size.
+    struct Header {
+        std::uint32_t depth;
+        std::uint64_t nodes, leaves, primitives;
+        double bound, leaf_scale;
+    };
+    /// The header in `data` (header_bytes, or `size` if fewer) of a file of `size` bytes, checked:
+    /// magic, version, its checksum, precision, widths, counts, depth and length; throws fail(what).
+    template <class Fail>
+    [[nodiscard]] static Header check_header(const unsigned char* data, std::uint64_t size, const Fail& fail) {
         if (size < 12 || std::memcmp(data, magic, 8) != 0)
             throw fail(size < 12 && std::memcmp(data, magic, std::min<std::size_t>(size, 8)) == 0
                            ? "truncated: " + std::to_string(size) + " bytes, less than a header"
@@ -278,6 +272,29 @@ public:
         const double bound = get_double(data + 56), leaf_scale = get_double(data + 64);
         if (!(double(T(bound)) == bound && bound >= 0.0) || !(double(T(leaf_scale)) == leaf_scale && leaf_scale >= 0.0))
             throw fail("bound or leaf scale out of range");
+        return {depth, nodes, leaves, primitives, bound, leaf_scale};
+    }
+
+    /// The Bvh in the `size` bytes `source` holds (MemorySource, FileSource), a file named `name`
+    /// in messages; throws BvhFileError. The file's parts are read straight into the Bvh's arrays
+    /// (padded records through a buffer of one piece), each piece summed and checked in cache.
+    template <class Source>
+    [[nodiscard]] static Bvh<T> decode(Source& source, std::uint64_t size, const std::string& name,
+                                       const ReadLimits& limits) {
+        const auto fail = [&name](const std::string& what) {
+            return BvhFileError("isin Bvh file " + name + ": " + what);
+        };
+        if (!detail::file_too_large(size, limits).empty()) throw fail(detail::file_too_large(size, limits));
+        if (size == 0) throw fail("is empty");
+        unsigned char data[header_bytes] = {};
+        const auto read = [&](void* to, std::size_t n) {
+            if (!source.read(to, n)) throw fail(source.error.empty() ? "truncated while it was read" : source.error);
+        };
+        read(data, std::size_t(std::min<std::uint64_t>(size, header_bytes)));
+        const Header h = check_header(data, size, fail);
+        const std::uint32_t depth = h.depth;
+        const std::uint64_t nodes = h.nodes, leaves = h.leaves, primitives = h.primitives;
+        const double bound = h.bound, leaf_scale = h.leaf_scale;
 
         Bvh<T> bvh;
         Tree& tree = bvh.tree_;
@@ -543,7 +560,7 @@ template <class T>
 Bvh<T> Bvh<T>::load(const std::string& path, ReadLimits limits) {
     const auto fail = [&path](const std::string& why) { return BvhFileError("isin Bvh file " + path + ": " + why); };
 #if ISIN_DETAIL_POSIX_FILES
-    // As read_whole_file (detail/file.hpp): regular files only, the size limit before any read.
+    // As read_whole_file (io/file.hpp): regular files only, the size limit before any read.
     const detail::Descriptor fd(::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC));
     if (fd.get() < 0) throw fail("cannot open: " + detail::errno_text(errno));
     struct stat st {};

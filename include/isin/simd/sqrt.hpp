@@ -1,5 +1,5 @@
 #pragma once
-/// isin — lane helpers of the point queries (closest_point.hpp, solid.hpp): eight square roots
+/// isin — eight square roots at once (the point queries: bvh/closest_point.hpp, solid.hpp),
 /// at once, in AVX registers where the target has them (a plain std::sqrt may set errno, so
 /// compilers do not vectorise it), one by one elsewhere; the same correctly rounded results.
 #include <cmath>
