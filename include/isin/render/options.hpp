@@ -29,8 +29,9 @@ struct RenderOptions {
     ColorEncoding encoding = ColorEncoding::linear;
     /// Stratified samples per area light (RectLight) per shading point, 1 … max_light_samples.
     int light_samples = 16;
-    /// Area lights' shadow rays to the corner strata first, to all samples only where those
-    /// disagree (a penumbra); false traces every sample's shadow ray.
+    /// Area lights' shadow rays to the four corners first (from 64 samples on, then to a quarter
+    /// of the samples spread over the light), to all samples only where those disagree (a
+    /// penumbra); false traces every sample's shadow ray.
     bool adaptive_light_samples = true;
     /// The largest light_samples.
     static constexpr int max_light_samples = 65536;
