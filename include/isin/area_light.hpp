@@ -235,9 +235,7 @@ template <class T, class SceneT>
             (void)detail::lane_normalize<T>(lx, ly, lz); // §2: L = (q − P)/|q − P|, or 0
             const V c = detail::lane_dot(V(p.N.x), V(p.N.y), V(p.N.z), lx, ly, lz); // §7: N·L
             // §7: Rf = d − 2(d·N)N with d = −L, and its cosine with V
-            const V twice = T(2) * detail::lane_dot(-lx, -ly, -lz, V(p.N.x), V(p.N.y), V(p.N.z));
-            const V rx = lane_fma(-twice, V(p.N.x), -lx), ry = lane_fma(-twice, V(p.N.y), -ly),
-                    rz = lane_fma(-twice, V(p.N.z), -lz);
+            const auto [rx, ry, rz] = detail::lane_reflect<T>(-lx, -ly, -lz, V(p.N.x), V(p.N.y), V(p.N.z));
             detail::store_lanes(detail::lane_dot(rx, ry, rz, V(p.V.x), V(p.V.y), V(p.V.z)), cosine + b);
             detail::store_lanes(select(c > T(0), c, V(T(0))), n_dot_l + b); // §7: facing away → unlit
         }

@@ -358,8 +358,7 @@ ISIN_DETAIL_NOINLINE void light_term_pass(T* p, std::size_t stride, std::size_t 
             lz = load_lanes<T, V>(of_light(Lanes::lz));
     const V n_dot_l = load_lanes<T, V>(of_light(Lanes::n_dot_l)), visible = load_lanes<T, V>(of_light(Lanes::visible));
     // §7: Rf = d − 2(d·N)N with d = −L, and its cosine with V
-    const V twice = T(2) * lane_dot(-lx, -ly, -lz, nx, ny, nz);
-    const V rx = lane_fma(-twice, nx, -lx), ry = lane_fma(-twice, ny, -ly), rz = lane_fma(-twice, nz, -lz);
+    const auto [rx, ry, rz] = lane_reflect<T>(-lx, -ly, -lz, nx, ny, nz);
     alignas(64) T cosine[W], shine[W], spec[W];
     store_lanes(lane_dot(rx, ry, rz, at(Lanes::vx), at(Lanes::vy), at(Lanes::vz)), cosine);
     store_lanes(at(Lanes::shininess), shine);

@@ -320,6 +320,20 @@ V lane_dot(V ax, V ay, V az, V bx, V by, V bz) noexcept {
     return lane_fma(az, bz, lane_fma(ay, by, ax * bx));
 }
 
+/// The three components of a vector of one value or of a register of lanes.
+template <class V>
+struct LaneVector {
+    V x, y, z;
+};
+
+/// reflect() (vec.hpp, §7: d − 2(d·N)N) of the vectors (dx, dy, dz) about (nx, ny, nz), of one
+/// value or a register of lanes; each product added as lane_fma adds it.
+template <class T, class V>
+LaneVector<V> lane_reflect(V dx, V dy, V dz, V nx, V ny, V nz) noexcept {
+    const V twice = T(2) * lane_dot(dx, dy, dz, nx, ny, nz);
+    return {lane_fma(-twice, nx, dx), lane_fma(-twice, ny, dy), lane_fma(-twice, nz, dz)};
+}
+
 /// normalize() (vec.hpp, §2: R / |R|) of the vectors (x, y, z) of one value or a register of
 /// lanes, with lane_dot's rounding: (0, 0, 0) where the length is 0 or not finite. Returns the
 /// length |R| it divided by.
