@@ -21,18 +21,19 @@
 namespace isin {
 namespace detail {
 
-/// Squared distances from p to the 8 child boxes of a node (+∞ for an empty slot, NaN for a NaN
-/// p): per axis the gap max(lo − p, p − hi, 0), each max std::max's (the first unless the second
-/// is larger). In lane vectors: GCC leaves the same loop over 8 floats scalar.
+/// Squared distances from p to 8 boxes given by their corners axis by axis (a node's children:
+/// +∞ for an empty slot; NaN for a NaN p): per axis the gap max(lo − p, p − hi, 0), each max
+/// std::max's (the first unless the second is larger). In lane vectors: GCC leaves the same
+/// loop over 8 floats scalar.
 template <class T>
-ISIN_DETAIL_INLINE void box_distances(const typename BvhTree<T>::Node& n, const T (&p)[3], T (&d2)[8]) noexcept {
+ISIN_DETAIL_INLINE void box_distances(const T (&lo)[3][8], const T (&hi)[3][8], const T (&p)[3], T (&d2)[8]) noexcept {
 #if ISIN_VECTOR_EXTENSIONS
     using V = L8<T>;
-    V sum = V{}, lo, hi;
+    V sum = V{}, l, h;
     for (int a = 0; a < 3; ++a) {
-        std::memcpy(&lo, n.lo[a], sizeof lo);
-        std::memcpy(&hi, n.hi[a], sizeof hi);
-        const V below = lo - p[a], above = p[a] - hi;
+        std::memcpy(&l, lo[a], sizeof l);
+        std::memcpy(&h, hi[a], sizeof h);
+        const V below = l - p[a], above = p[a] - h;
         const V out = below < above ? above : below;
         const V gap = out < V{} ? V{} : out;
         sum += gap * gap;
@@ -42,41 +43,36 @@ ISIN_DETAIL_INLINE void box_distances(const typename BvhTree<T>::Node& n, const 
     for (int k = 0; k < 8; ++k) d2[k] = T(0);
     for (int a = 0; a < 3; ++a)
         for (int k = 0; k < 8; ++k) {
-            const T gap = std::max(std::max(n.lo[a][k] - p[a], p[a] - n.hi[a][k]), T(0));
+            const T gap = std::max(std::max(lo[a][k] - p[a], p[a] - hi[a][k]), T(0));
             d2[k] += gap * gap;
         }
 #endif
 }
 
-/// Squared distances from p to the boxes of a block's 8 triangles (all lanes, padding too),
-/// computed as box_distances.
+/// Squared distances from p to the boxes of a block's 8 triangles (all lanes, padding too).
 template <class T>
 ISIN_DETAIL_INLINE void triangle_box_distances(const TriangleBlock<T>& b, const T (&p)[3], T (&d2)[8]) noexcept {
+    alignas(8 * sizeof(T)) T lo[3][8], hi[3][8];
 #if ISIN_VECTOR_EXTENSIONS
     using V = L8<T>;
-    V sum = V{}, c0, c1, c2;
+    V c0, c1, c2;
     for (int a = 0; a < 3; ++a) {
         std::memcpy(&c0, b.v[0][a], sizeof c0);
         std::memcpy(&c1, b.v[1][a], sizeof c1);
         std::memcpy(&c2, b.v[2][a], sizeof c2);
         const V lo01 = c1 < c0 ? c1 : c0, hi01 = c0 < c1 ? c1 : c0;
-        const V lo = c2 < lo01 ? c2 : lo01, hi = hi01 < c2 ? c2 : hi01;
-        const V below = lo - p[a], above = p[a] - hi;
-        const V out = below < above ? above : below;
-        const V gap = out < V{} ? V{} : out;
-        sum += gap * gap;
+        const V l = c2 < lo01 ? c2 : lo01, h = hi01 < c2 ? c2 : hi01;
+        std::memcpy(lo[a], &l, sizeof l);
+        std::memcpy(hi[a], &h, sizeof h);
     }
-    std::memcpy(d2, &sum, sizeof d2);
 #else
-    for (int k = 0; k < 8; ++k) d2[k] = T(0);
     for (int a = 0; a < 3; ++a)
         for (int k = 0; k < 8; ++k) {
             const T c0 = b.v[0][a][k], c1 = b.v[1][a][k], c2 = b.v[2][a][k];
-            const T lo = std::min(std::min(c0, c1), c2), hi = std::max(std::max(c0, c1), c2);
-            const T gap = std::max(std::max(lo - p[a], p[a] - hi), T(0));
-            d2[k] += gap * gap;
+            lo[a][k] = std::min(std::min(c0, c1), c2), hi[a][k] = std::max(std::max(c0, c1), c2);
         }
 #endif
+    box_distances(lo, hi, p, d2);
 }
 
 /// Lower bounds of the squared distances from p to a block's 8 triangles (all lanes, padding
@@ -133,7 +129,7 @@ template <class T>
         if (!(e.ref & Tree::leaf_bit)) {
             const typename Tree::Node& n = tree.nodes()[e.ref];
             T d2[8];
-            box_distances<T>(n, q, d2);
+            box_distances<T>(n.lo, n.hi, q, d2);
             // Pushed farthest first (insertion into the stack's top), so the nearest box is
             // walked first and shrinks the sphere; empty slots (+∞) and NaN fail the test.
             const int base = top;
