@@ -214,8 +214,8 @@ public:
     [[nodiscard]] std::size_t size() const noexcept {
         return std::apply([](const auto&... v) { return (std::size_t(0) + ... + v.size()); }, objects_);
     }
-    [[nodiscard]] std::size_t mesh_count() const noexcept { return meshes_.size(); }
-    [[nodiscard]] std::size_t instance_count() const noexcept { return instances_.size(); }
+    [[nodiscard]] std::size_t mesh_count() const noexcept { return meshes_.size(); } ///< meshes stored by add_mesh
+    [[nodiscard]] std::size_t instance_count() const noexcept { return instances_.size(); } ///< placements of meshes
     /// The stored mesh `id` and its Bvh.
     [[nodiscard]] const Mesh<T>& mesh(MeshId id) const { return *meshes_.at(id.index).mesh; }
     [[nodiscard]] const Bvh<T>& mesh_bvh(MeshId id) const { return *meshes_.at(id.index).bvh; }
