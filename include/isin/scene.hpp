@@ -131,15 +131,9 @@ public:
     Acceleration acceleration = Acceleration::automatic;
 
     /// Adds a material; returns its index.
-    std::uint32_t add_material(const Material<T>& m) {
-        materials.push_back(m);
-        return static_cast<std::uint32_t>(materials.size() - 1);
-    }
+    std::uint32_t add_material(const Material<T>& m);
     /// Adds a texture; returns its index for Material::texture.
-    int add_texture(Texture<T> image) {
-        textures.push_back(std::move(image));
-        return static_cast<int>(textures.size() - 1);
-    }
+    int add_texture(Texture<T> image);
     /// Adds a point light.
     void add_light(const PointLight<T>& light) { lights.push_back(light); }
     /// Adds a rectangular area light (a template, so that braced calls such as
@@ -151,41 +145,18 @@ public:
 
     /// Material `index`; throws std::out_of_range if it does not exist (materials is public and
     /// may have changed since an object was added).
-    [[nodiscard]] const Material<T>& material(std::uint32_t index) const {
-        if (index >= materials.size()) detail::throw_missing("material", index, materials.size());
-        return materials[index];
-    }
+    [[nodiscard]] const Material<T>& material(std::uint32_t index) const;
     /// Texture `index` (Material::texture); throws std::out_of_range if it does not exist.
-    [[nodiscard]] const Texture<T>& texture(int index) const {
-        if (index < 0 || std::size_t(index) >= textures.size())
-            detail::throw_missing("texture", index, textures.size());
-        return textures[std::size_t(index)];
-    }
+    [[nodiscard]] const Texture<T>& texture(int index) const;
     /// Checks that every object's and mesh's materials and every material's texture (when ≥ 0)
     /// exist; throws std::out_of_range naming the first that does not. render() calls it first.
-    void validate() const {
-        for (std::size_t i = 0; i < materials.size(); ++i)
-            if (materials[i].texture >= 0 && std::size_t(materials[i].texture) >= textures.size())
-                throw std::out_of_range("isin::Scene: material " + std::to_string(i) + " uses texture " +
-                                        std::to_string(materials[i].texture) + ", which does not exist (" +
-                                        std::to_string(textures.size()) + " textures)");
-        for_each_kind([&](auto, const auto& vec) {
-            for (std::size_t i = 0; i < vec.size(); ++i) (void)material(vec[i].material);
-        });
-        for (const MeshEntry& m : meshes_) (void)material(m.material + m.largest_material_id);
-    }
+    void validate() const;
 
     /// Adds a primitive of one of the scene's kinds with a material index from add_material.
     /// Throws std::out_of_range for an unknown material. The kind's acceleration is rebuilt by
     /// the next commit() or, failing that, by the next trace (intersect, occluded, render, ...).
     template <class Shape>
-    void add(const Shape& shape, std::uint32_t material_id) {
-        (void)material(material_id);
-        constexpr std::size_t kind = index_of<Shape>();
-        std::get<kind>(objects_).push_back({shape, material_id});
-        std::get<kind>(accel_) = {};
-        commit_state_.stale.store(true, std::memory_order_relaxed);
-    }
+    void add(const Shape& shape, std::uint32_t material_id);
 
     /// Stores `mesh` (once, however often it is placed), builds its Bvh and places it once, where
     /// it stands. Every triangle has `material`, or, when mesh.material is not empty, material +
@@ -193,51 +164,22 @@ public:
     /// Throws std::invalid_argument for an invalid mesh (Mesh::validate), std::out_of_range for a
     /// material that does not exist. The Bvh over the placements is built by commit() or, failing
     /// that, by the next trace.
-    MeshId add_mesh(Mesh<T> mesh, std::uint32_t material_id, const BvhOptions& options = {}) {
-        return add_mesh_entry(std::move(mesh), material_id,
-                              [&options](const Mesh<T>& m) { return std::make_shared<const Bvh<T>>(m, options); });
-    }
+    MeshId add_mesh(Mesh<T> mesh, std::uint32_t material_id, const BvhOptions& options = {});
     /// Adds a triangle soup as a mesh (three vertices a triangle), as add_mesh(Mesh).
     MeshId add_mesh(const std::vector<Triangle<T>>& triangles, std::uint32_t material_id,
-                    const BvhOptions& options = {}) {
-        return add_mesh(Mesh<T>::from_triangles(triangles), material_id, options);
-    }
+                    const BvhOptions& options = {});
     /// As add_mesh(mesh, material_id), with `bvh` a Bvh built before over this mesh (e.g.
     /// Bvh<T>::load of a file saved from mesh_bvh(id)): nothing is built, instances share it as
     /// usual. Throws std::invalid_argument unless `bvh` holds exactly the triangles of `mesh` that
     /// a ray can hit, each once, vertex for vertex (O(triangles), far cheaper than a build).
-    MeshId add_mesh(Mesh<T> mesh, std::uint32_t material_id, Bvh<T> bvh) {
-        return add_mesh_entry(std::move(mesh), material_id, [&bvh](const Mesh<T>& m) {
-            check_built_over(bvh, m);
-            return std::make_shared<const Bvh<T>>(std::move(bvh));
-        });
-    }
+    MeshId add_mesh(Mesh<T> mesh, std::uint32_t material_id, Bvh<T> bvh);
 
     /// Places mesh `id` again, moved by `to_world` (any affine transform with det ≠ 0). Its faces
     /// keep their sides: the front is the mesh's clockwise side, also under a mirroring transform
     /// (whose world-space winding is reversed). Memory: a transform, not a copy of the mesh.
     /// Throws std::out_of_range for an unknown id, std::invalid_argument for a transform that is
     /// not finite or cannot be inverted.
-    InstanceId add_instance(MeshId id, const Transform<T>& to_world) {
-        if (id.index >= meshes_.size())
-            throw std::out_of_range("isin::Scene::add_instance: mesh " + std::to_string(id.index) + " does not exist");
-        const T det = to_world.determinant();
-        Instance inst;
-        inst.mesh = id.index;
-        inst.to_world = to_world;
-        inst.to_object = to_world.inverse();
-        bool finite = std::isfinite(det) && det != T(0);
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) finite = finite && std::isfinite(inst.to_object.m[i][j]);
-        if (!finite || !is_finite(to_world.d) || !is_finite(inst.to_object.d))
-            throw std::invalid_argument("isin::Scene::add_instance: the transform is not finite or cannot be inverted");
-        inst.identity = to_world.is_identity();
-        inst.box = world_box(meshes_[id.index].bvh->tree().bounds(), to_world);
-        instances_.push_back(inst);
-        top_.reset(); // stale: commit() or the next trace builds it again
-        commit_state_.stale.store(true, std::memory_order_relaxed);
-        return InstanceId{static_cast<std::uint32_t>(instances_.size() - 1)};
-    }
+    InstanceId add_instance(MeshId id, const Transform<T>& to_world);
 
     /// Builds what the sizes call for: a Bvh or batch for each kind (by acceleration, bvh_min,
     /// shape_bvh_min, batch_min) and the Bvh over the placed meshes, with `options` (kept for
@@ -245,11 +187,7 @@ public:
     /// builds what is missing, once, even when several threads start tracing at the same time;
     /// commit() lets the build happen before, e.g. outside a timed render. Adding N meshes costs
     /// N mesh builds (in add_mesh) and one cheap build here, not N rebuilds of everything.
-    void commit(const BvhOptions& options = {}) {
-        commit_options_ = options;
-        build(false);
-        commit_state_.stale.store(false, std::memory_order_release);
-    }
+    void commit(const BvhOptions& options = {});
     /// Whether nothing changed since the accelerations were last built (by commit() or a trace).
     [[nodiscard]] bool committed() const noexcept { return !commit_state_.stale.load(std::memory_order_acquire); }
 
@@ -257,11 +195,7 @@ public:
     /// angle, texel (0,0)), `v1` = texel (w,0), `v2` = texel (0,h); the fourth corner is v1 + v2 − v0.
     template <class S = TexturedTriangle<T>>
     void add_textured_rectangle(const Vertex<T>& v0, const Vertex<T>& v1, const Vertex<T>& v2,
-                                std::uint32_t material_id) {
-        const Vertex<T> v3 = v1 + v2 - v0;
-        add(S{{v0, v1, v2}, false}, material_id);
-        add(S{{v3, v2, v1}, true}, material_id);
-    }
+                                std::uint32_t material_id);
 
     /// The objects of one primitive kind.
     template <class Shape>
@@ -280,29 +214,14 @@ public:
     [[nodiscard]] std::size_t size() const noexcept {
         return std::apply([](const auto&... v) { return (std::size_t(0) + ... + v.size()); }, objects_);
     }
-    [[nodiscard]] std::size_t mesh_count() const noexcept { return meshes_.size(); }
-    [[nodiscard]] std::size_t instance_count() const noexcept { return instances_.size(); }
+    [[nodiscard]] std::size_t mesh_count() const noexcept { return meshes_.size(); } ///< meshes stored by add_mesh
+    [[nodiscard]] std::size_t instance_count() const noexcept { return instances_.size(); } ///< placements of meshes
     /// The stored mesh `id` and its Bvh.
     [[nodiscard]] const Mesh<T>& mesh(MeshId id) const { return *meshes_.at(id.index).mesh; }
     [[nodiscard]] const Bvh<T>& mesh_bvh(MeshId id) const { return *meshes_.at(id.index).bvh; }
     /// Bytes held by the stored meshes, their Bvhs, the placements and their Bvh, the kinds'
     /// objects and accelerations (not materials, lights or textures).
-    [[nodiscard]] std::size_t memory() const noexcept {
-        std::size_t bytes = instances_.capacity() * sizeof(Instance) + (top_ ? tree_memory(*top_) : 0);
-        for (const MeshEntry& m : meshes_)
-            bytes += m.bvh->memory() + m.mesh->positions.capacity() * sizeof(Vertex<T>) +
-                     m.mesh->indices.capacity() * sizeof(m.mesh->indices[0]) +
-                     m.mesh->normals.capacity() * sizeof(Vertex<T>) + m.mesh->uvs.capacity() * sizeof(m.mesh->uvs[0]) +
-                     m.mesh->material.capacity() * sizeof(std::uint32_t);
-        for_each_kind([&](auto kind, const auto& vec) {
-            const auto& accel = std::get<kind>(accel_);
-            bytes += vec.capacity() * sizeof(vec[0]);
-            if (accel.triangles) bytes += accel.triangles->memory();
-            if (accel.objects) bytes += tree_memory(*accel.objects);
-            if (accel.batch) bytes += accel.batch->size() * 9 * sizeof(T);
-        });
-        return bytes;
-    }
+    [[nodiscard]] std::size_t memory() const noexcept;
 
     /// Nearest hit with t in (0, t_max) over all objects and placed meshes (§3, §5: the smallest
     /// t is visible). The hit's `geometry` says where: a kind (its position in the scene's list)
@@ -312,197 +231,50 @@ public:
     /// a changed scene throws (std::bad_alloc): every trace call first builds what a change since
     /// the last commit() dropped (see commit).
     [[nodiscard]] Hit<T> intersect(const Ray<T>& ray, T t_max = std::numeric_limits<T>::infinity(),
-                                   const Culled* culled = nullptr) const {
-        prepare();
-        Hit<T> best;
-        T t = t_max;
-        for_each_kind([&](auto kind, const auto& vec) { nearest_of_kind(kind, vec, ray, culled, t, best); });
-        if (!instances_.empty()) nearest_placement(ray, t, culled && culled->mesh_backfaces, best);
-        return best;
-    }
+                                   const Culled* culled = nullptr) const;
 
     /// Nearest hits of a stream of rays: hits[i] = intersect(rays[i], ∞, culled) for i < count, the
     /// same hits bit for bit. Triangle kinds with a Bvh, and a scene's one placed mesh, take the
     /// rays through the Bvh's stream call (16 coherent rays as a packet: order them in 4×4 tiles
     /// of pixels); everything else goes one ray at a time.
-    void intersect(const Ray<T>* rays, std::size_t count, Hit<T>* hits, const Culled* culled = nullptr) const {
-        stream_nearest(RayArray{rays}, count, hits, culled);
-    }
+    void intersect(const Ray<T>* rays, std::size_t count, Hit<T>* hits, const Culled* culled = nullptr) const;
     /// As above, the rays as separate arrays.
-    void intersect(const RaysSoA<T>& rays, std::size_t count, Hit<T>* hits, const Culled* culled = nullptr) const {
-        stream_nearest([&rays](std::size_t i) { return rays[i]; }, count, hits, culled);
-    }
+    void intersect(const RaysSoA<T>& rays, std::size_t count, Hit<T>* hits, const Culled* culled = nullptr) const;
     /// Both stream intersects with the rays shared among options.threads threads (StreamOptions;
     /// the forms above use the calling thread alone): the same hits for any thread count.
     void intersect(const Ray<T>* rays, std::size_t count, Hit<T>* hits, const Culled* culled,
-                   const StreamOptions& options) const {
-        in_threads(count, options, [&](std::size_t first, std::size_t end) {
-            stream_nearest(RayArray{rays + first}, end - first, hits + first, culled);
-        });
-    }
+                   const StreamOptions& options) const;
     void intersect(const RaysSoA<T>& rays, std::size_t count, Hit<T>* hits, const Culled* culled,
-                   const StreamOptions& options) const {
-        in_threads(count, options, [&](std::size_t first, std::size_t end) {
-            stream_nearest([&rays, first](std::size_t i) { return rays[first + i]; }, end - first, hits + first,
-                           culled);
-        });
-    }
+                   const StreamOptions& options) const;
 
     /// True when any object or placed mesh is hit with t in (0, t_max), whatever its material:
     /// a shadow ray in a scene of opaque objects (transmittance weighs transparent ones).
-    [[nodiscard]] bool occluded(const Ray<T>& ray, T t_max) const {
-        prepare();
-        bool hit = false;
-        for_each_kind([&](auto kind, const auto& vec) {
-            if (!hit) hit = occluded_by_kind(kind, vec, ray, t_max);
-        });
-        if (hit || instances_.empty()) return hit;
-        T t = t_max;
-        for_each_instance(ray, t, [&](std::uint32_t i, T&) {
-            hit = meshes_[instances_[i].mesh].bvh->occluded(object_ray(instances_[i], ray), t_max);
-            return hit;
-        });
-        return hit;
-    }
+    [[nodiscard]] bool occluded(const Ray<T>& ray, T t_max) const;
     /// Shadow rays of a stream: blocked[i] = occluded(rays[i], t_max[i]) (1 or 0) for i < count;
     /// packets as for the stream intersect.
-    void occluded(const Ray<T>* rays, std::size_t count, const T* t_max, std::uint8_t* blocked) const {
-        stream_occluded(RayArray{rays}, count, t_max, blocked);
-    }
+    void occluded(const Ray<T>* rays, std::size_t count, const T* t_max, std::uint8_t* blocked) const;
     /// As above, the rays as separate arrays.
-    void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked) const {
-        stream_occluded([&rays](std::size_t i) { return rays[i]; }, count, t_max, blocked);
-    }
+    void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked) const;
     /// Both stream occluded calls with the rays shared among options.threads threads.
     void occluded(const Ray<T>* rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
-                  const StreamOptions& options) const {
-        in_threads(count, options, [&](std::size_t first, std::size_t end) {
-            stream_occluded(RayArray{rays + first}, end - first, t_max + first, blocked + first);
-        });
-    }
+                  const StreamOptions& options) const;
     void occluded(const RaysSoA<T>& rays, std::size_t count, const T* t_max, std::uint8_t* blocked,
-                  const StreamOptions& options) const {
-        in_threads(count, options, [&](std::size_t first, std::size_t end) {
-            stream_occluded([&rays, first](std::size_t i) { return rays[first + i]; }, end - first, t_max + first,
-                            blocked + first);
-        });
-    }
+                  const StreamOptions& options) const;
 
     /// Fraction of light that reaches along `ray` up to t_max: 1 when nothing is in the way, the
     /// product of the transparencies of the objects crossed otherwise (0 for an opaque one, at
     /// which it stops). Every kind and placed mesh goes through its Bvh's all-hits traversal.
-    [[nodiscard]] T transmittance(const Ray<T>& ray, T t_max) const {
-        prepare();
-        T through = T(1);
-        for_each_kind([&](auto kind, const auto& vec) {
-            if (through > T(0)) transmit_kind(kind, vec, ray, t_max, through);
-        });
-        if (!(through > T(0))) return T(0);
-        if (!instances_.empty()) through *= placements_transmittance(ray, t_max);
-        return through > T(0) ? through : T(0);
-    }
+    [[nodiscard]] T transmittance(const Ray<T>& ray, T t_max) const;
     /// Shadow rays of a stream: through[i] = transmittance(rays[i], t_max[i]) for i < count, the
     /// same values bit for bit. Kinds too small for a Bvh are tested rays × objects in lanes
     /// (ray_lanes.hpp), the rest ray by ray. With `options`, the rays shared among options.threads
     /// threads (StreamOptions; without, the calling thread alone): the same values for any count.
     void transmittance(const Ray<T>* rays, std::size_t count, const T* t_max, T* through,
-                       const StreamOptions& options) const {
-        in_threads(count, options, [&](std::size_t first, std::size_t end) {
-            transmittance(rays + first, end - first, t_max + first, through + first);
-        });
-    }
-    void transmittance(const Ray<T>* rays, std::size_t count, const T* t_max, T* through) const {
-        prepare();
-        RayLanes<T> lanes;
-        RayLaneHits<T> exact;
-        for (std::size_t first = 0; first < count; first += stream_chunk) {
-            const std::size_t n = std::min(stream_chunk, count - first);
-            const Ray<T>* r = rays + first;
-            const T* limit = t_max + first;
-            T* out = through + first;
-            for (std::size_t k = 0; k < n; ++k) out[k] = T(1);
-            bool lanes_set = false;
-            for_each_kind([&](auto kind, const auto& vec) {
-                if (!in_lanes(kind, vec, false)) {
-                    for (std::size_t k = 0; k < n; ++k)
-                        if (out[k] > T(0)) transmit_kind(kind, vec, r[k], limit[k], out[k]);
-                    return;
-                }
-                if (!lanes_set) lanes.assign(r, n), lanes_set = true;
-                std::uint64_t open = 0; // rays that light still gets through
-                for (std::size_t k = 0; k < n; ++k) open |= std::uint64_t(out[k] > T(0)) << k;
-                for (std::size_t i = 0; i < vec.size() && open; ++i)
-                    each_lane_hit(lanes, r, vec[i].shape, open, exact, [&](int k, const Hit<T>& h) {
-                        if (!(h.t < limit[k])) return;
-                        out[k] *= material(vec[i].material).transparency;
-                        if (!(out[k] > T(0))) open &= ~(std::uint64_t(1) << k);
-                    });
-            });
-            for (std::size_t k = 0; k < n; ++k) {
-                if (out[k] > T(0) && !instances_.empty()) out[k] *= placements_transmittance(r[k], limit[k]);
-                if (!(out[k] > T(0))) out[k] = T(0);
-            }
-        }
-    }
+                       const StreamOptions& options) const;
+    void transmittance(const Ray<T>* rays, std::size_t count, const T* t_max, T* through) const;
 
     /// Point, normals, material, texture coordinates and colour of a hit of `ray`.
-    [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const Hit<T>& hit) const {
-        SurfacePoint<T> sp{};
-        sp.tint = {T(1), T(1), T(1)};
-        if (hit.geometry >= kinds) { // a placed mesh
-            const Instance& inst = instances_.at(hit.geometry - kinds);
-            const Mesh<T>& mesh = *meshes_[inst.mesh].mesh;
-            const auto& k = mesh.indices.at(hit.primitive);
-            const Triangle<T> tri = mesh.triangle(hit.primitive);
-            // §2 normal of the mesh's triangle (out of its clockwise face); the point from the
-            // barycentrics in the mesh's own space (hit_point), then to the world with its bound.
-            const Vertex<T> geometric = normal(tri);
-            const BoundedPoint<T> local = detail::triangle_hit_point(tri, hit, geometric);
-            const BoundedPoint<T> world = inst.identity ? local : inst.to_world.bounded_point(local);
-            sp.point = world.point, sp.error = world.error;
-            sp.shading_point = sp.point;
-            // The normal to world space by the inverse transpose: out of the same side after any
-            // transform, mirrors included.
-            sp.normal = normalize(Transform<T>::normal(inst.to_object, geometric));
-            sp.shading_normal = sp.normal;
-            sp.material = meshes_[inst.mesh].material + (mesh.material.empty() ? 0 : mesh.material[hit.primitive]);
-            const T b[3] = {T(1) - hit.u - hit.v, hit.u, hit.v}; // weights of V0, V1, V2
-            sp.has_texture_coordinates = !mesh.uvs.empty();
-            if (sp.has_texture_coordinates) {
-                const auto &a = mesh.uvs[k[0]], &bb = mesh.uvs[k[1]], &c = mesh.uvs[k[2]];
-                sp.st = {b[0] * a[0] + b[1] * bb[0] + b[2] * c[0], b[0] * a[1] + b[1] * bb[1] + b[2] * c[1]};
-            }
-            if (!mesh.colors.empty())
-                sp.tint = b[0] * mesh.colors[k[0]] + b[1] * mesh.colors[k[1]] + b[2] * mesh.colors[k[2]];
-            if (!mesh.normals.empty()) smooth_shading(sp, inst, mesh, k, b, tri, geometric, local.point, ray);
-            return sp;
-        }
-        for_each_kind([&](auto kind, const auto& vec) {
-            if (kind != hit.geometry) return;
-            using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
-            const auto& obj = vec.at(hit.primitive);
-            if constexpr (is_triangle_kind<Shape>::value) { // what the renderer computes in lanes
-                T p[3], e[3], n[3];
-                detail::triangle_surface<T, T>(detail::vertices_of(*triangle_of(obj.shape)).data(), hit.u, hit.v, p, e,
-                                               n);
-                sp.point = {p[0], p[1], p[2]}, sp.error = {e[0], e[1], e[2]}, sp.normal = {n[0], n[1], n[2]};
-            } else if constexpr (std::is_same_v<Shape, Sphere<T>>) { // hit_point and normal_at at once
-                detail::sphere_surface(ray, obj.shape, hit.t, &sp.point, &sp.error, &sp.normal);
-            } else {
-                const BoundedPoint<T> p = hit_point(ray, obj.shape, hit);
-                // component by component: g++ stored p float by float and copied it 8 bytes at a
-                // time, a store-forwarding stall per hit (a fifth of the note's scene's shading)
-                sp.point.x = p.point.x, sp.point.y = p.point.y, sp.point.z = p.point.z;
-                sp.error.x = p.error.x, sp.error.y = p.error.y, sp.error.z = p.error.z;
-                sp.normal = surface_normal(ray, obj.shape, sp.point, hit);
-            }
-            sp.shading_point = sp.point;
-            sp.shading_normal = sp.normal;
-            sp.material = obj.material;
-            sp.has_texture_coordinates = texture_coordinates(obj.shape, hit, sp.st);
-        });
-        return sp;
-    }
+    [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const Hit<T>& hit) const;
 
     /// Calls f(kind, vector) for each primitive kind, kind as a std::size_t constant.
     template <class F>
@@ -511,51 +283,6 @@ public:
     }
 
 private:
-    // add_mesh with the mesh's Bvh from make_bvh(stored mesh).
-    template <class MakeBvh>
-    MeshId add_mesh_entry(Mesh<T> mesh, std::uint32_t material_id, MakeBvh&& make_bvh) {
-        mesh.validate();
-        MeshEntry entry;
-        entry.largest_material_id =
-            mesh.material.empty() ? 0 : *std::max_element(mesh.material.begin(), mesh.material.end());
-        (void)material(material_id + entry.largest_material_id);
-        entry.material = material_id;
-        entry.mesh = std::make_shared<const Mesh<T>>(std::move(mesh));
-        entry.bvh = make_bvh(*entry.mesh);
-        meshes_.push_back(std::move(entry));
-        const MeshId id{static_cast<std::uint32_t>(meshes_.size() - 1)};
-        (void)add_instance(id, Transform<T>::identity());
-        return id;
-    }
-    // Throws std::invalid_argument unless `bvh`'s blocks hold the triangles of `mesh` a ray can
-    // hit (Bvh::bounds usable), each once, with the same vertex bits.
-    static void check_built_over(const Bvh<T>& bvh, const Mesh<T>& mesh) {
-        const auto fail = [](const std::string& what) {
-            return std::invalid_argument("isin::Scene::add_mesh: the Bvh is not this mesh's: " + what);
-        };
-        std::vector<bool> held(mesh.size(), false);
-        for (std::size_t l = 0; l < bvh.leaf_count(); ++l) {
-            const auto& block = bvh.blocks()[l];
-            for (std::uint32_t k = 0; k < bvh.tree().leaves()[l].count; ++k) {
-                const std::uint32_t i = block.primitive[k];
-                if (i >= mesh.size() || held[i])
-                    throw fail("triangle " + std::to_string(i) + (i >= mesh.size() ? " is beyond the mesh" : " twice"));
-                held[i] = true;
-                const Triangle<T> tri = mesh.triangle(i);
-                const Vertex<T>* vs[3] = {&tri.v0, &tri.v1, &tri.v2};
-                for (int v = 0; v < 3; ++v)
-                    for (int a = 0; a < 3; ++a) {
-                        const T x = component(*vs[v], a);
-                        if (std::memcmp(&x, &block.v[v][a][k], sizeof(T)) != 0)
-                            throw fail("triangle " + std::to_string(i) + " has other vertices");
-                    }
-            }
-        }
-        for (std::size_t i = 0; i < mesh.size(); ++i)
-            if (!held[i] && Bvh<T>::bounds(mesh.triangle(i)).usable())
-                throw fail("triangle " + std::to_string(i) + " is missing");
-    }
-
     struct MeshEntry {
         std::shared_ptr<const Mesh<T>> mesh; // shared by copies of the scene
         std::shared_ptr<const Bvh<T>> bvh;
@@ -568,82 +295,61 @@ private:
         Box<T> box; // in the world
     };
 
-    // Shading normal and shadow-ray point of a hit on a mesh with vertex normals (see SurfacePoint).
-    // `b` are the barycentric weights of the triangle's vertices, `geometric` its §2 normal and `p`
-    // the hit point Σ b_i·P_i (object space). Vertex normals that are zero or not finite leave the
-    // geometric normal in place.
+    // Setup (below the class).
+    /// add_mesh with the mesh's Bvh from make_bvh(stored mesh).
+    template <class MakeBvh>
+    MeshId add_mesh_entry(Mesh<T> mesh, std::uint32_t material_id, MakeBvh&& make_bvh);
+    /// Throws std::invalid_argument unless `bvh` was built over `mesh` (add_mesh with a Bvh).
+    static void check_built_over(const Bvh<T>& bvh, const Mesh<T>& mesh);
+    /// The world box of a mesh box moved by `to_world`: the box of its 8 moved corners.
+    [[nodiscard]] static Box<T> world_box(const Box<T>& b, const Transform<T>& to_world) noexcept;
+    /// Bytes held by a tree over objects.
+    [[nodiscard]] static std::size_t tree_memory(const BvhTree<T>& tree) noexcept {
+        return tree.node_count() * sizeof(typename BvhTree<T>::Node) +
+               tree.leaf_count() * sizeof(typename BvhTree<T>::Leaf) + tree.size() * sizeof(std::uint32_t);
+    }
+    /// The position of kind Shape in the scene's list.
+    template <class Shape, std::size_t I = 0>
+    static constexpr std::size_t index_of() {
+        static_assert(I < kinds, "isin::Scene::add: this scene does not hold that primitive kind");
+        if constexpr (std::is_same_v<Shape, std::tuple_element_t<I, std::tuple<Shapes<T>...>>>)
+            return I;
+        else
+            return index_of<Shape, I + 1>();
+    }
+    /// for_each_kind over the kinds I.
+    template <class F, std::size_t... I>
+    void for_each_kind_impl(F& f, std::index_sequence<I...>) const {
+        (f(std::integral_constant<std::size_t, I>{}, std::get<I>(objects_)), ...);
+    }
+
+    // Building the accelerations (scene/build.hpp).
+    /// Builds each kind's acceleration and the placements' Bvh (only_missing: those a change dropped).
+    void build(bool only_missing) const;
+    /// Builds what a change since the last build dropped, once, whichever trace comes first.
+    void prepare() const;
+    /// prepare's build, under the lock.
+    ISIN_DETAIL_COLD void prepare_locked() const;
+    /// Whether kind `kind` of n objects is tested with acceleration `a`.
+    [[nodiscard]] bool uses(Acceleration a, std::size_t kind, std::size_t n) const noexcept;
+    /// Whether kind `kind` is a triangle kind.
+    [[nodiscard]] static constexpr bool triangle_kind(std::size_t kind) noexcept {
+        constexpr bool is[] = {is_triangle_kind<Shapes<T>>::value...};
+        return is[kind];
+    }
+
+    // One ray (scene/trace.hpp).
+    /// Shading normal and shadow-ray point of a hit on a mesh with vertex normals.
     static void smooth_shading(SurfacePoint<T>& sp, const Instance& inst, const Mesh<T>& mesh,
                                const std::array<std::uint32_t, 3>& k, const T (&b)[3], const Triangle<T>& tri,
-                               const Vertex<T>& geometric, const Vertex<T>& p, const Ray<T>& ray) {
-        const Vertex<T>* n[3] = {&mesh.normals[k[0]], &mesh.normals[k[1]], &mesh.normals[k[2]]};
-        const Vertex<T> interpolated = b[0] * *n[0] + b[1] * *n[1] + b[2] * *n[2]; // Phong: blend the normals
-        Vertex<T> shading = normalize(Transform<T>::normal(inst.to_object, interpolated));
-        if (!is_finite(shading) || !(dot(shading, shading) > T(0.5))) return;
-        if (dot(shading, sp.normal) < T(0)) shading = -shading; // authored against the winding: same side
-        sp.shading_normal = shading;
-        // Hanika's shading point, in object space: for each vertex P_i with normal n_i (turned to
-        // the side the ray came from), t_i = (p − P_i) − min(0, (p − P_i)·n_i)·n_i, the vector from
-        // P_i to p lifted onto P_i's tangent plane where p lies below it; p' = Σ b_i·(P_i + t_i).
-        // As Σ b_i·P_i = p, p' = p + lift with lift = −Σ b_i·min(0, (p − P_i)·n_i)·n_i, added to
-        // the point on the ray (p here only serves the dot products).
-        const bool from_front =
-            dot(geometric, inst.identity ? ray.direction : inst.to_object.vector(ray.direction)) < T(0);
-        const Vertex<T> P[3] = {tri.v0, tri.v1, tri.v2};
-        Vertex<T> lift{T(0), T(0), T(0)};
-        for (int i = 0; i < 3; ++i) {
-            Vertex<T> ni = *n[i];
-            if ((dot(ni, geometric) < T(0)) == from_front) ni = -ni; // the normal on the ray's side
-            const T len2 = dot(ni, ni);
-            if (!(len2 > T(0)) || !std::isfinite(len2)) continue;
-            ni = ni / std::sqrt(len2);
-            const T below = std::min(T(0), dot(p - P[i], ni));
-            lift = lift - (b[i] * below) * ni;
-        }
-        if (is_finite(lift)) sp.shading_point = sp.point + (inst.identity ? lift : inst.to_world.vector(lift));
-    }
-
-    // The nearest hit among the objects of kind `kind` (`vec`), nearer than t (which it lowers),
-    // into `best`, without those `culled` names.
+                               const Vertex<T>& geometric, const Vertex<T>& p, const Ray<T>& ray);
+    /// The nearest hit among kind `kind`'s objects nearer than t (lowered), into `best`.
     template <class Kind, class Objects>
     void nearest_of_kind(Kind kind, const Objects& vec, const Ray<T>& ray, const Culled* culled, T& t,
-                         Hit<T>& best) const {
-        using Shape = typename Objects::value_type::shape_type;
-        const auto take = [&](Hit<T> h) {
-            if (!(h.t < t)) return;
-            t = h.t, best = h;
-            best.geometry = static_cast<std::uint32_t>(kind);
-        };
-        const std::uint8_t* mask = culled && !culled->objects[kind].empty() ? culled->objects[kind].data() : nullptr;
-        const auto& accel = std::get<kind>(accel_);
-        if constexpr (is_triangle_kind<Shape>::value) {
-            if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) {
-                HitFilter filter;
-                filter.skip = mask;
-                return take(accel.triangles->intersect(ray, t, filter));
-            }
-            if (accel.batch && !mask && uses(Acceleration::batch, kind, vec.size()))
-                return take(accel.batch->nearest(ray, t));
-        } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
-            return nearest_in_tree(*accel.objects, vec, kind, ray, mask, t, best);
-        }
-        one_by_one(vec, ray, mask, [&](std::size_t i, Hit<T> h) {
-            h.primitive = static_cast<std::uint32_t>(i);
-            take(h);
-            return false;
-        });
-    }
-
-    // Whether kind Shape's objects, where the Scene tests them one after another, take the exact
-    // test in lanes (hit_lanes, ray_lanes.hpp): the built-in kinds, triangles by Möller–Trumbore.
+                         Hit<T>& best) const;
+    /// Whether kind Shape's objects, tested one after another, take the exact test in lanes.
     template <class Shape>
-    [[nodiscard]] bool exact_in_lanes() const noexcept {
-        if constexpr (!detail::has_lane_hits<T, Shape>::value)
-            return false;
-        else if constexpr (is_triangle_kind<Shape>::value)
-            return triangle_method == TriangleMethod::moller_trumbore;
-        else
-            return true;
-    }
+    [[nodiscard]] bool exact_in_lanes() const noexcept;
 
     // One ray's tests of single objects: hit(shape) is the ray's hit on it (or a miss), by the
     // exact test of the lanes (ray_lanes.hpp) run on plain values where the kind has it
@@ -670,466 +376,68 @@ private:
         detail::RayRegister<T, T> ray_register_; // one ray, one value per coordinate
     };
 
-    // Calls f(i, hit) for the objects of `vec` in order (but those `skip` names), with the hit of
-    // `ray` on each (OneRay), until f returns true.
+    /// Calls f(i, hit) for the objects of `vec` in order (but those `skip` names) until f is true.
     template <class Objects, class F>
-    void one_by_one(const Objects& vec, const Ray<T>& ray, const std::uint8_t* skip, F&& f) const {
-        OneRay one(*this, ray);
-        for (std::size_t i = 0; i < vec.size(); ++i) {
-            if (skip && skip[i]) continue;
-            if (f(i, one.hit(vec[i].shape))) return;
-        }
-    }
-
-    // Whether any object of kind `kind` is hit with t in (0, t_max).
+    void one_by_one(const Objects& vec, const Ray<T>& ray, const std::uint8_t* skip, F&& f) const;
+    /// Whether any object of kind `kind` is hit with t in (0, t_max).
     template <class Kind, class Objects>
-    bool occluded_by_kind(Kind kind, const Objects& vec, const Ray<T>& ray, T t_max) const {
-        using Shape = typename Objects::value_type::shape_type;
-        const auto& accel = std::get<kind>(accel_);
-        if constexpr (is_triangle_kind<Shape>::value) {
-            if (accel.triangles && uses(Acceleration::bvh, kind, vec.size()))
-                return accel.triangles->occluded(ray, t_max);
-            if (accel.batch && uses(Acceleration::batch, kind, vec.size()))
-                return accel.batch->nearest(ray, t_max).t < t_max;
-        } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
-            T t = t_max;
-            OneRay one(*this, ray);
-            return traverse<Visit::any>(*accel.objects, ray, t, [&](std::uint32_t leaf, T&) {
-                const auto& l = accel.objects->leaves()[leaf];
-                for (std::uint32_t j = l.first; j < l.first + l.count; ++j)
-                    if (one.hit(vec[accel.objects->primitives()[j]].shape).t < t_max) return true;
-                return false;
-            });
-        }
-        bool blocked = false;
-        one_by_one(vec, ray, nullptr, [&](std::size_t, const Hit<T>& h) { return blocked = h.t < t_max; });
-        return blocked;
-    }
-
-    // Multiplies `through` (> 0) by the transparencies of the objects of kind `kind` that `ray`
-    // crosses before t_max, in their order, down to 0 at the first opaque one (transmittance).
+    bool occluded_by_kind(Kind kind, const Objects& vec, const Ray<T>& ray, T t_max) const;
+    /// Multiplies `through` by the transparencies of kind `kind`'s objects crossed before t_max.
     template <class Kind, class Objects>
-    void transmit_kind(Kind kind, const Objects& vec, const Ray<T>& ray, T t_max, T& through) const {
-        using Shape = typename Objects::value_type::shape_type;
-        // Multiplies in the transparency of material m; false once nothing gets through.
-        const auto pass = [&](std::uint32_t m) {
-            through *= material(m).transparency;
-            return through > T(0);
-        };
-        const auto& accel = std::get<kind>(accel_);
-        if constexpr (is_triangle_kind<Shape>::value) {
-            if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) {
-                accel.triangles->for_each_hit(ray, t_max,
-                                              [&](std::uint32_t i, const Hit<T>&) { return pass(vec[i].material); });
-                return;
-            }
-            if (accel.batch && uses(Acceleration::batch, kind, vec.size())) {
-                accel.batch->each_hit(ray, t_max, [&](std::size_t i, T) { return pass(vec[i].material); });
-                return;
-            }
-        } else if (accel.objects && uses(Acceleration::bvh, kind, vec.size())) {
-            through *= tree_transmittance(*accel.objects, vec, ray, t_max);
-            return;
-        }
-        one_by_one(vec, ray, nullptr,
-                   [&](std::size_t i, const Hit<T>& h) { return h.t < t_max && !pass(vec[i].material); });
-    }
+    void transmit_kind(Kind kind, const Objects& vec, const Ray<T>& ray, T t_max, T& through) const;
+    /// The nearest hit among `vec` of kind `kind` through their Bvh, nearer than t, into `best`.
+    template <class Objects>
+    void nearest_in_tree(const BvhTree<T>& tree, const Objects& vec, std::size_t kind, const Ray<T>& ray,
+                         const std::uint8_t* mask, T& t, Hit<T>& best) const;
+    /// The fraction of light that gets through the objects `vec` up to t_max, through their Bvh.
+    template <class Objects>
+    T tree_transmittance(const BvhTree<T>& tree, const Objects& vec, const Ray<T>& ray, T t_max) const;
+    /// The nearest hit in a placed mesh nearer than t (which it lowers), into `best`.
+    void nearest_placement(const Ray<T>& ray, T& t, bool cull, Hit<T>& best) const noexcept;
+    /// The fraction of light that gets through the placed meshes up to t_max.
+    T placements_transmittance(const Ray<T>& ray, T t_max) const;
+    /// The ray in placement `inst`'s mesh space: same t for the same point (affine map).
+    [[nodiscard]] static Ray<T> object_ray(const Instance& inst, const Ray<T>& ray) noexcept;
+    /// Calls visit(i, t_max) for each placement the ray may meet, until visit returns true.
+    template <class Visit_>
+    void for_each_instance(const Ray<T>& ray, T& t_max, Visit_&& visit) const;
 
-    // may_hit for a kind that has it; every ray for one that has not (in_lanes keeps such kinds
-    // out of the lanes: this only lets the stream loops compile for them).
-    template <class Shape>
-    [[nodiscard]] static std::uint64_t lane_filter(const RayLanes<T>& lanes, const Shape& shape) noexcept {
-        if constexpr (detail::has_lane_filter<T, Shape>::value) {
-            return may_hit(lanes, shape);
-        } else {
-            (void)shape;
-            return all_rays(lanes.count);
-        }
-    }
-
-    // The bits of rays [0, n) of a block.
-    [[nodiscard]] static std::uint64_t all_rays(std::size_t n) noexcept {
-        return n >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
-    }
-
-    // Calls f(k, hit) for rays k of `open` (bits of the block `lanes` holds, rays[k]) that may hit
-    // `shape`, in order of k: those the exact test in lanes hits (hit_lanes) where the kind has it
-    // (exact_in_lanes, as one_by_one tests one ray), else those the kind's filter keeps (may_hit)
-    // with intersect_primitive's hit or miss. `exact` is scratch space.
-    template <class Shape, class F>
-    void each_lane_hit(const RayLanes<T>& lanes, const Ray<T>* rays, const Shape& shape, std::uint64_t open,
-                       RayLaneHits<T>& exact, F&& f) const {
-        if constexpr (detail::has_lane_hits<T, Shape>::value) {
-            if (exact_in_lanes<Shape>()) {
-                for (std::uint64_t hit = hit_lanes(lanes, detail::lane_shape(shape), exact) & open; hit;
-                     hit &= hit - 1) {
-                    const int k = detail::lowest_bit(hit);
-                    f(k, Hit<T>::at(exact.t[k], exact.u[k], exact.v[k]));
-                }
-                return;
-            }
-        }
-        (void)exact;
-        for (std::uint64_t maybe = lane_filter(lanes, shape) & open; maybe; maybe &= maybe - 1) {
-            const int k = detail::lowest_bit(maybe);
-            f(k, intersect_primitive(rays[k], shape, triangle_method));
-        }
-    }
-
-    // Whether the stream calls test kind `kind` rays × objects in lanes: where the single-ray
-    // calls test its objects one after another (no Bvh; no batch, which a mask turns off for
-    // nearest hits) and the kind has a lane filter (may_hit; triangles by Möller–Trumbore).
-    template <class Kind, class Objects>
-    [[nodiscard]] bool in_lanes(Kind kind, const Objects& vec, bool masked) const noexcept {
-        using Shape = typename Objects::value_type::shape_type;
-        if constexpr (!detail::has_lane_filter<T, Shape>::value) {
-            return false;
-        } else {
-            const auto& accel = std::get<kind>(accel_);
-            if constexpr (is_triangle_kind<Shape>::value) {
-                if (triangle_method != TriangleMethod::moller_trumbore) return false;
-                if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) return false;
-                return !(accel.batch && !masked && uses(Acceleration::batch, kind, vec.size()));
-            } else {
-                return !(accel.objects && uses(Acceleration::bvh, kind, vec.size()));
-            }
-        }
-    }
-
-    // The rays of a stream given as one array: read in place (the other forms are copied).
+    // Streams of rays (scene/stream.hpp).
+    /// The rays of a stream given as one array: read in place (the other forms are copied).
     struct RayArray {
         const Ray<T>* rays;
         Ray<T> operator()(std::size_t i) const noexcept { return rays[i]; }
     };
-    // rays[first, first + n) of a stream: in place for an array, else copied into `copy`.
-    template <class RayAt>
-    static const Ray<T>* chunk_of(const RayAt& ray_at, std::size_t first, std::size_t n, Ray<T>* copy) {
-        if constexpr (std::is_same_v<RayAt, RayArray>) {
-            (void)n, (void)copy;
-            return ray_at.rays + first;
-        } else {
-            for (std::size_t k = 0; k < n; ++k) copy[k] = ray_at(first + k);
-            return copy;
-        }
-    }
-
     // Rays of a stream are taken this many at a time (their state lives on the stack).
     static constexpr std::size_t stream_chunk = 64;
     static_assert(stream_chunk <= RayLanes<T>::capacity, "a chunk of rays fits one block of lanes");
 
-    // The stream intersect: kind by kind as intersect does, so that each ray meets the same
-    // bounds in the same order and ends with the same hit.
+    /// may_hit for a kind that has it; every ray for one that has not.
+    template <class Shape>
+    [[nodiscard]] static std::uint64_t lane_filter(const RayLanes<T>& lanes, const Shape& shape) noexcept;
+    /// The bits of rays [0, n) of a block.
+    [[nodiscard]] static std::uint64_t all_rays(std::size_t n) noexcept {
+        return n >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
+    }
+    /// Calls f(k, hit) for the rays k of `open` that hit `shape` (or may hit it), in order of k.
+    template <class Shape, class F>
+    void each_lane_hit(const RayLanes<T>& lanes, const Ray<T>* rays, const Shape& shape, std::uint64_t open,
+                       RayLaneHits<T>& exact, F&& f) const;
+    /// Whether the stream calls test kind `kind` rays × objects in lanes.
+    template <class Kind, class Objects>
+    [[nodiscard]] bool in_lanes(Kind kind, const Objects& vec, bool masked) const noexcept;
+    /// rays[first, first + n) of a stream: in place for an array, else copied into `copy`.
     template <class RayAt>
-    void stream_nearest(const RayAt& ray_at, std::size_t count, Hit<T>* hits, const Culled* culled) const {
-        prepare();
-        Ray<T> copy[stream_chunk];
-        T t[stream_chunk];
-        Hit<T> found[stream_chunk];
-        RayLanes<T> lanes;
-        RayLaneHits<T> exact;
-        for (std::size_t first = 0; first < count; first += stream_chunk) {
-            const std::size_t n = std::min(stream_chunk, count - first);
-            const Ray<T>* rays = chunk_of(ray_at, first, n, copy);
-            Hit<T>* best = hits + first;
-            for (std::size_t k = 0; k < n; ++k) t[k] = std::numeric_limits<T>::infinity(), best[k] = Hit<T>{};
-            bool lanes_set = false;
-            for_each_kind([&](auto kind, const auto& vec) {
-                using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
-                const auto& accel = std::get<kind>(accel_);
-                const std::uint8_t* mask =
-                    culled && !culled->objects[kind].empty() ? culled->objects[kind].data() : nullptr;
-                if (in_lanes(kind, vec, mask != nullptr)) { // as nearest_of_kind's loop
-                    if (!lanes_set) lanes.assign(rays, n), lanes_set = true;
-                    for (std::size_t i = 0; i < vec.size(); ++i) {
-                        if (mask && mask[i]) continue;
-                        each_lane_hit(lanes, rays, vec[i].shape, all_rays(n), exact, [&](int k, const Hit<T>& h) {
-                            if (!(h.t < t[k])) return;
-                            // field by field: a whole-struct copy of h read it back from the stack
-                            // wider than it had been stored, a store-forwarding stall per hit
-                            t[k] = h.t, best[k].t = h.t, best[k].u = h.u, best[k].v = h.v;
-                            best[k].primitive = static_cast<std::uint32_t>(i);
-                            best[k].geometry = static_cast<std::uint32_t>(kind);
-                        });
-                    }
-                    return;
-                }
-                if constexpr (is_triangle_kind<Shape>::value) {
-                    if (accel.triangles && uses(Acceleration::bvh, kind, vec.size())) {
-                        HitFilter filter;
-                        filter.skip = mask;
-                        accel.triangles->intersect(rays, n, t, found, filter);
-                        for (std::size_t k = 0; k < n; ++k)
-                            if (found[k].t < t[k])
-                                t[k] = found[k].t, best[k] = found[k],
-                                best[k].geometry = static_cast<std::uint32_t>(kind);
-                        return;
-                    }
-                }
-                for (std::size_t k = 0; k < n; ++k) nearest_of_kind(kind, vec, rays[k], culled, t[k], best[k]);
-            });
-            if (instances_.empty()) continue;
-            const bool cull = culled && culled->mesh_backfaces;
-            if (instances_.size() == 1 && !top_) { // one placed mesh: its Bvh's stream call
-                const Instance& inst = instances_[0];
-                Ray<T> object[stream_chunk];
-                for (std::size_t k = 0; k < n; ++k) object[k] = object_ray(inst, rays[k]);
-                HitFilter filter;
-                filter.cull_backfaces = cull;
-                meshes_[inst.mesh].bvh->intersect(object, n, t, found, filter);
-                for (std::size_t k = 0; k < n; ++k)
-                    if (found[k].t < t[k])
-                        t[k] = found[k].t, best[k] = found[k], best[k].geometry = static_cast<std::uint32_t>(kinds);
-                continue;
-            }
-            for (std::size_t k = 0; k < n; ++k) nearest_placement(rays[k], t[k], cull, best[k]);
-        }
-    }
-
-    // The stream occluded: a ray already blocked goes on with t_max = 0 (nothing to find).
+    static const Ray<T>* chunk_of(const RayAt& ray_at, std::size_t first, std::size_t n, Ray<T>* copy);
+    /// The stream intersect: kind by kind as intersect does, each ray ending with the same hit.
     template <class RayAt>
-    void stream_occluded(const RayAt& ray_at, std::size_t count, const T* t_max, std::uint8_t* blocked) const {
-        prepare();
-        Ray<T> copy[stream_chunk];
-        T limit[stream_chunk];
-        std::uint8_t hit[stream_chunk];
-        RayLanes<T> lanes;
-        RayLaneHits<T> exact;
-        for (std::size_t first = 0; first < count; first += stream_chunk) {
-            bool lanes_set = false;
-            const std::size_t n = std::min(stream_chunk, count - first);
-            const Ray<T>* rays = chunk_of(ray_at, first, n, copy);
-            std::uint8_t* out = blocked + first;
-            for (std::size_t k = 0; k < n; ++k) limit[k] = t_max[first + k], out[k] = 0;
-            const auto through_bvh = [&](const Bvh<T>& bvh, const Ray<T>* r) {
-                for (std::size_t k = 0; k < n; ++k)
-                    if (out[k]) limit[k] = T(0);
-                bvh.occluded(r, n, limit, hit);
-                for (std::size_t k = 0; k < n; ++k) out[k] |= hit[k];
-            };
-            for_each_kind([&](auto kind, const auto& vec) {
-                using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
-                const auto& accel = std::get<kind>(accel_);
-                if constexpr (is_triangle_kind<Shape>::value) {
-                    if (accel.triangles && uses(Acceleration::bvh, kind, vec.size()))
-                        return through_bvh(*accel.triangles, rays);
-                }
-                if (in_lanes(kind, vec, false)) { // as occluded_by_kind's loop
-                    if (!lanes_set) lanes.assign(rays, n), lanes_set = true;
-                    std::uint64_t open = 0; // rays not blocked yet
-                    for (std::size_t k = 0; k < n; ++k) open |= std::uint64_t(out[k] == 0) << k;
-                    for (std::size_t i = 0; i < vec.size() && open; ++i)
-                        each_lane_hit(lanes, rays, vec[i].shape, open, exact, [&](int k, const Hit<T>& h) {
-                            if (!(h.t < limit[k])) return;
-                            out[k] = 1;
-                            open &= ~(std::uint64_t(1) << k);
-                        });
-                    return;
-                }
-                for (std::size_t k = 0; k < n; ++k)
-                    if (!out[k]) out[k] = occluded_by_kind(kind, vec, rays[k], limit[k]) ? 1 : 0;
-            });
-            if (instances_.empty()) continue;
-            if (instances_.size() == 1 && !top_) {
-                Ray<T> object[stream_chunk];
-                for (std::size_t k = 0; k < n; ++k) object[k] = object_ray(instances_[0], rays[k]);
-                through_bvh(*meshes_[instances_[0].mesh].bvh, object);
-                continue;
-            }
-            for (std::size_t k = 0; k < n; ++k) {
-                if (out[k]) continue;
-                T t = limit[k];
-                for_each_instance(rays[k], t, [&](std::uint32_t i, T&) {
-                    out[k] = meshes_[instances_[i].mesh].bvh->occluded(object_ray(instances_[i], rays[k]), limit[k]);
-                    return out[k] != 0;
-                });
-            }
-        }
-    }
-
-    // The nearest hit among the objects `vec` of kind `kind` through their Bvh, nearer than t
-    // (which it lowers), into `best`.
-    template <class Objects>
-    void nearest_in_tree(const BvhTree<T>& tree, const Objects& vec, std::size_t kind, const Ray<T>& ray,
-                         const std::uint8_t* mask, T& t, Hit<T>& best) const {
-        OneRay one(*this, ray);
-        traverse<Visit::nearest>(tree, ray, t, [&](std::uint32_t leaf, T&) {
-            const auto& l = tree.leaves()[leaf];
-            for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
-                const std::uint32_t i = tree.primitives()[j];
-                if (mask && mask[i]) continue;
-                const Hit<T> h = one.hit(vec[i].shape);
-                if (!(h.t < t)) continue;
-                t = h.t, best = h;
-                best.primitive = i, best.geometry = static_cast<std::uint32_t>(kind);
-            }
-            return false;
-        });
-    }
-
-    // The fraction of light that gets through the objects `vec` up to t_max, through their Bvh.
-    template <class Objects>
-    T tree_transmittance(const BvhTree<T>& tree, const Objects& vec, const Ray<T>& ray, T t_max) const {
-        T through = T(1), t = t_max;
-        OneRay one(*this, ray);
-        traverse<Visit::any>(tree, ray, t, [&](std::uint32_t leaf, T&) {
-            const auto& l = tree.leaves()[leaf];
-            for (std::uint32_t j = l.first; j < l.first + l.count; ++j) {
-                const std::uint32_t i = tree.primitives()[j];
-                if (!(one.hit(vec[i].shape).t < t_max)) continue;
-                through *= material(vec[i].material).transparency;
-                if (!(through > T(0))) return true;
-            }
-            return false;
-        });
-        return through;
-    }
-
-    // The nearest hit in a placed mesh nearer than t (which it lowers), into `best`.
-    void nearest_placement(const Ray<T>& ray, T& t, bool cull, Hit<T>& best) const noexcept {
-        for_each_instance(ray, t, [&](std::uint32_t i, T&) {
-            const Instance& inst = instances_[i];
-            HitFilter filter;
-            filter.cull_backfaces = cull; // in the mesh's own space: a mirrored copy keeps its outside
-            const Hit<T> h = meshes_[inst.mesh].bvh->intersect(object_ray(inst, ray), t, filter);
-            if (h.t < t) t = h.t, best = h, best.geometry = static_cast<std::uint32_t>(kinds + i);
-            return false;
-        });
-    }
-
-    // The fraction of light that gets through the placed meshes up to t_max.
-    T placements_transmittance(const Ray<T>& ray, T t_max) const {
-        T through = T(1), t = t_max;
-        for_each_instance(ray, t, [&](std::uint32_t i, T&) {
-            const Instance& inst = instances_[i];
-            const MeshEntry& m = meshes_[inst.mesh];
-            return m.bvh->for_each_hit(object_ray(inst, ray), t_max, [&](std::uint32_t tri, const Hit<T>&) {
-                through *= material(m.material + (m.mesh->material.empty() ? 0 : m.mesh->material[tri])).transparency;
-                return through > T(0);
-            });
-        });
-        return through;
-    }
-
-    // Builds each kind's acceleration and the placements' Bvh with commit_options_; with
-    // only_missing, just those a change dropped (the others are still right).
-    void build(bool only_missing) const {
-        const BvhOptions& options = commit_options_;
-        for_each_kind([&](auto kind, const auto& vec) {
-            using Shape = typename std::decay_t<decltype(vec)>::value_type::shape_type;
-            auto& accel = std::get<kind>(accel_);
-            if (only_missing && (accel.triangles || accel.objects || accel.batch)) return;
-            accel = {};
-            if (uses(Acceleration::bvh, kind, vec.size())) {
-                if constexpr (is_triangle_kind<Shape>::value)
-                    accel.triangles = std::make_shared<const Bvh<T>>(
-                        vec.size(), [&vec](std::size_t i) { return *triangle_of(vec[i].shape); }, options);
-                else if constexpr (detail::has_bounds<T, Shape>::value) {
-                    BvhOptions small_leaves = options;
-                    small_leaves.leaf_size = shape_leaf_size;
-                    accel.objects = std::make_shared<const BvhTree<T>>(build_bvh<T>(
-                        vec.size(), [&vec](std::size_t i) { return bounds(vec[i].shape); }, small_leaves));
-                }
-            } else if constexpr (is_triangle_kind<Shape>::value) {
-                if (uses(Acceleration::batch, kind, vec.size())) {
-                    auto batch = std::make_shared<TriangleBatch<T>>();
-                    batch->reserve(vec.size());
-                    for (const auto& obj : vec) batch->push_back(*triangle_of(obj.shape));
-                    accel.batch = std::move(batch);
-                }
-            }
-        });
-        if (only_missing && top_) return;
-        top_.reset();
-        if (instances_.size() > 1) {
-            BvhOptions one_per_leaf = options; // each placement's own box is tested before its mesh is entered
-            one_per_leaf.leaf_size = 1;
-            top_ = std::make_shared<const BvhTree<T>>(build_bvh<T>(
-                instances_.size(), [this](std::size_t i) { return instances_[i].box; }, one_per_leaf));
-        }
-    }
-
-    // f(first, end) over blocks of a stream of `count` rays on options.threads threads, once the
-    // scene is built (here, not by each thread).
+    void stream_nearest(const RayAt& ray_at, std::size_t count, Hit<T>* hits, const Culled* culled) const;
+    /// The stream occluded: a ray already blocked goes on with t_max = 0 (nothing to find).
+    template <class RayAt>
+    void stream_occluded(const RayAt& ray_at, std::size_t count, const T* t_max, std::uint8_t* blocked) const;
+    /// f(first, end) over blocks of a stream on options.threads threads, once the scene is built.
     template <class F>
-    void in_threads(std::size_t count, const StreamOptions& options, const F& f) const {
-        prepare();
-        detail::parallel_blocks(count, detail::thread_count(options.threads), StreamOptions::block, f);
-    }
-
-    // Builds what a change since the last build dropped, once: the first of several concurrent
-    // traces builds it, the others wait for it; then every trace sees the built scene.
-    void prepare() const {
-        if (!commit_state_.stale.load(std::memory_order_acquire)) return;
-        prepare_locked();
-    }
-    ISIN_DETAIL_COLD void prepare_locked() const {
-        const std::lock_guard<std::mutex> hold(commit_state_.lock);
-        if (!commit_state_.stale.load(std::memory_order_relaxed)) return;
-        build(true);
-        commit_state_.stale.store(false, std::memory_order_release);
-    }
-
-    // Whether kind `kind` of n objects is tested with acceleration `a`.
-    [[nodiscard]] bool uses(Acceleration a, std::size_t kind, std::size_t n) const noexcept {
-        if (triangle_method != TriangleMethod::moller_trumbore) return false;
-        if (acceleration != Acceleration::automatic) return acceleration == a;
-        if (a == Acceleration::batch) return triangle_kind(kind) && n >= batch_min;
-        return n >= (triangle_kind(kind) ? bvh_min : shape_bvh_min);
-    }
-    [[nodiscard]] static constexpr bool triangle_kind(std::size_t kind) noexcept {
-        constexpr bool is[] = {is_triangle_kind<Shapes<T>>::value...};
-        return is[kind];
-    }
-
-    // The ray in placement `inst`'s mesh space: same t for the same point (affine map).
-    [[nodiscard]] static Ray<T> object_ray(const Instance& inst, const Ray<T>& ray) noexcept {
-        if (inst.identity) return ray;
-        return {inst.to_object.point(ray.origin), inst.to_object.vector(ray.direction)};
-    }
-
-    // Calls visit(i, t_max) for each placement the ray may meet: through their Bvh when there is
-    // one, else all of them; visit returns true to stop.
-    template <class Visit_>
-    void for_each_instance(const Ray<T>& ray, T& t_max, Visit_&& visit) const {
-        if (top_) {
-            traverse<Visit::nearest>(*top_, ray, t_max, [&](std::uint32_t leaf, T& t) {
-                const auto& l = top_->leaves()[leaf];
-                for (std::uint32_t j = l.first; j < l.first + l.count; ++j)
-                    if (visit(top_->primitives()[j], t)) return true;
-                return false;
-            });
-            return;
-        }
-        for (std::size_t i = 0; i < instances_.size(); ++i)
-            if (visit(static_cast<std::uint32_t>(i), t_max)) return;
-    }
-
-    // The world box of a mesh box moved by `to_world`: the box of its 8 moved corners.
-    [[nodiscard]] static Box<T> world_box(const Box<T>& b, const Transform<T>& to_world) noexcept {
-        Box<T> w;
-        if (!(b.lo.x <= b.hi.x)) return w;
-        for (int c = 0; c < 8; ++c)
-            w.grow(to_world.point({(c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z}));
-        return w;
-    }
-    [[nodiscard]] static std::size_t tree_memory(const BvhTree<T>& tree) noexcept {
-        return tree.node_count() * sizeof(typename BvhTree<T>::Node) +
-               tree.leaf_count() * sizeof(typename BvhTree<T>::Leaf) + tree.size() * sizeof(std::uint32_t);
-    }
-
-    template <class Shape, std::size_t I = 0>
-    static constexpr std::size_t index_of() {
-        static_assert(I < kinds, "isin::Scene::add: this scene does not hold that primitive kind");
-        if constexpr (std::is_same_v<Shape, std::tuple_element_t<I, std::tuple<Shapes<T>...>>>)
-            return I;
-        else
-            return index_of<Shape, I + 1>();
-    }
-
-    template <class F, std::size_t... I>
-    void for_each_kind_impl(F& f, std::index_sequence<I...>) const {
-        (f(std::integral_constant<std::size_t, I>{}, std::get<I>(objects_)), ...);
-    }
+    void in_threads(std::size_t count, const StreamOptions& options, const F& f) const;
 
     std::tuple<std::vector<Object<Shapes<T>>>...> objects_;
     // built by commit() or the first trace after a change (prepare)
@@ -1148,7 +456,187 @@ private:
 template <class T>
 using StandardScene = Scene<T, Sphere, Triangle, TexturedTriangle>;
 
+// Setup: materials, textures, objects, meshes and their placements.
+
+template <class T, template <class> class... Shapes>
+inline std::uint32_t Scene<T, Shapes...>::add_material(const Material<T>& m) {
+    materials.push_back(m);
+    return static_cast<std::uint32_t>(materials.size() - 1);
+}
+
+template <class T, template <class> class... Shapes>
+inline int Scene<T, Shapes...>::add_texture(Texture<T> image) {
+    textures.push_back(std::move(image));
+    return static_cast<int>(textures.size() - 1);
+}
+
+template <class T, template <class> class... Shapes>
+inline const Material<T>& Scene<T, Shapes...>::material(std::uint32_t index) const {
+    if (index >= materials.size()) detail::throw_missing("material", index, materials.size());
+    return materials[index];
+}
+
+template <class T, template <class> class... Shapes>
+inline const Texture<T>& Scene<T, Shapes...>::texture(int index) const {
+    if (index < 0 || std::size_t(index) >= textures.size()) detail::throw_missing("texture", index, textures.size());
+    return textures[std::size_t(index)];
+}
+
+template <class T, template <class> class... Shapes>
+inline void Scene<T, Shapes...>::validate() const {
+    for (std::size_t i = 0; i < materials.size(); ++i)
+        if (materials[i].texture >= 0 && std::size_t(materials[i].texture) >= textures.size())
+            throw std::out_of_range("isin::Scene: material " + std::to_string(i) + " uses texture " +
+                                    std::to_string(materials[i].texture) + ", which does not exist (" +
+                                    std::to_string(textures.size()) + " textures)");
+    for_each_kind([&](auto, const auto& vec) {
+        for (std::size_t i = 0; i < vec.size(); ++i) (void)material(vec[i].material);
+    });
+    for (const MeshEntry& m : meshes_) (void)material(m.material + m.largest_material_id);
+}
+
+template <class T, template <class> class... Shapes>
+template <class Shape>
+inline void Scene<T, Shapes...>::add(const Shape& shape, std::uint32_t material_id) {
+    (void)material(material_id);
+    constexpr std::size_t kind = index_of<Shape>();
+    std::get<kind>(objects_).push_back({shape, material_id});
+    std::get<kind>(accel_) = {};
+    commit_state_.stale.store(true, std::memory_order_relaxed);
+}
+
+template <class T, template <class> class... Shapes>
+inline MeshId Scene<T, Shapes...>::add_mesh(Mesh<T> mesh, std::uint32_t material_id, const BvhOptions& options) {
+    return add_mesh_entry(std::move(mesh), material_id,
+                          [&options](const Mesh<T>& m) { return std::make_shared<const Bvh<T>>(m, options); });
+}
+
+template <class T, template <class> class... Shapes>
+inline MeshId Scene<T, Shapes...>::add_mesh(const std::vector<Triangle<T>>& triangles, std::uint32_t material_id,
+                                            const BvhOptions& options) {
+    return add_mesh(Mesh<T>::from_triangles(triangles), material_id, options);
+}
+
+template <class T, template <class> class... Shapes>
+inline MeshId Scene<T, Shapes...>::add_mesh(Mesh<T> mesh, std::uint32_t material_id, Bvh<T> bvh) {
+    return add_mesh_entry(std::move(mesh), material_id, [&bvh](const Mesh<T>& m) {
+        check_built_over(bvh, m);
+        return std::make_shared<const Bvh<T>>(std::move(bvh));
+    });
+}
+
+template <class T, template <class> class... Shapes>
+inline InstanceId Scene<T, Shapes...>::add_instance(MeshId id, const Transform<T>& to_world) {
+    if (id.index >= meshes_.size())
+        throw std::out_of_range("isin::Scene::add_instance: mesh " + std::to_string(id.index) + " does not exist");
+    const T det = to_world.determinant();
+    Instance inst;
+    inst.mesh = id.index;
+    inst.to_world = to_world;
+    inst.to_object = to_world.inverse();
+    bool finite = std::isfinite(det) && det != T(0);
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) finite = finite && std::isfinite(inst.to_object.m[i][j]);
+    if (!finite || !is_finite(to_world.d) || !is_finite(inst.to_object.d))
+        throw std::invalid_argument("isin::Scene::add_instance: the transform is not finite or cannot be inverted");
+    inst.identity = to_world.is_identity();
+    inst.box = world_box(meshes_[id.index].bvh->tree().bounds(), to_world);
+    instances_.push_back(inst);
+    top_.reset(); // stale: commit() or the next trace builds it again
+    commit_state_.stale.store(true, std::memory_order_relaxed);
+    return InstanceId{static_cast<std::uint32_t>(instances_.size() - 1)};
+}
+
+template <class T, template <class> class... Shapes>
+template <class S>
+inline void Scene<T, Shapes...>::add_textured_rectangle(const Vertex<T>& v0, const Vertex<T>& v1, const Vertex<T>& v2,
+                                                        std::uint32_t material_id) {
+    const Vertex<T> v3 = v1 + v2 - v0;
+    add(S{{v0, v1, v2}, false}, material_id);
+    add(S{{v3, v2, v1}, true}, material_id);
+}
+
+template <class T, template <class> class... Shapes>
+inline std::size_t Scene<T, Shapes...>::memory() const noexcept {
+    std::size_t bytes = instances_.capacity() * sizeof(Instance) + (top_ ? tree_memory(*top_) : 0);
+    for (const MeshEntry& m : meshes_)
+        bytes += m.bvh->memory() + m.mesh->positions.capacity() * sizeof(Vertex<T>) +
+                 m.mesh->indices.capacity() * sizeof(m.mesh->indices[0]) +
+                 m.mesh->normals.capacity() * sizeof(Vertex<T>) + m.mesh->uvs.capacity() * sizeof(m.mesh->uvs[0]) +
+                 m.mesh->material.capacity() * sizeof(std::uint32_t);
+    for_each_kind([&](auto kind, const auto& vec) {
+        const auto& accel = std::get<kind>(accel_);
+        bytes += vec.capacity() * sizeof(vec[0]);
+        if (accel.triangles) bytes += accel.triangles->memory();
+        if (accel.objects) bytes += tree_memory(*accel.objects);
+        if (accel.batch) bytes += accel.batch->size() * 9 * sizeof(T);
+    });
+    return bytes;
+}
+
+template <class T, template <class> class... Shapes>
+template <class MakeBvh>
+inline MeshId Scene<T, Shapes...>::add_mesh_entry(Mesh<T> mesh, std::uint32_t material_id, MakeBvh&& make_bvh) {
+    mesh.validate();
+    MeshEntry entry;
+    entry.largest_material_id =
+        mesh.material.empty() ? 0 : *std::max_element(mesh.material.begin(), mesh.material.end());
+    (void)material(material_id + entry.largest_material_id);
+    entry.material = material_id;
+    entry.mesh = std::make_shared<const Mesh<T>>(std::move(mesh));
+    entry.bvh = make_bvh(*entry.mesh);
+    meshes_.push_back(std::move(entry));
+    const MeshId id{static_cast<std::uint32_t>(meshes_.size() - 1)};
+    (void)add_instance(id, Transform<T>::identity());
+    return id;
+}
+
+// Throws std::invalid_argument unless `bvh`'s blocks hold the triangles of `mesh` a ray can
+// hit (Bvh::bounds usable), each once, with the same vertex bits.
+template <class T, template <class> class... Shapes>
+inline void Scene<T, Shapes...>::check_built_over(const Bvh<T>& bvh, const Mesh<T>& mesh) {
+    const auto fail = [](const std::string& what) {
+        return std::invalid_argument("isin::Scene::add_mesh: the Bvh is not this mesh's: " + what);
+    };
+    std::vector<bool> held(mesh.size(), false);
+    for (std::size_t l = 0; l < bvh.leaf_count(); ++l) {
+        const auto& block = bvh.blocks()[l];
+        for (std::uint32_t k = 0; k < bvh.tree().leaves()[l].count; ++k) {
+            const std::uint32_t i = block.primitive[k];
+            if (i >= mesh.size() || held[i])
+                throw fail("triangle " + std::to_string(i) + (i >= mesh.size() ? " is beyond the mesh" : " twice"));
+            held[i] = true;
+            const Triangle<T> tri = mesh.triangle(i);
+            const Vertex<T>* vs[3] = {&tri.v0, &tri.v1, &tri.v2};
+            for (int v = 0; v < 3; ++v)
+                for (int a = 0; a < 3; ++a) {
+                    const T x = component(*vs[v], a);
+                    if (std::memcmp(&x, &block.v[v][a][k], sizeof(T)) != 0)
+                        throw fail("triangle " + std::to_string(i) + " has other vertices");
+                }
+        }
+    }
+    for (std::size_t i = 0; i < mesh.size(); ++i)
+        if (!held[i] && Bvh<T>::bounds(mesh.triangle(i)).usable())
+            throw fail("triangle " + std::to_string(i) + " is missing");
+}
+
+template <class T, template <class> class... Shapes>
+inline Box<T> Scene<T, Shapes...>::world_box(const Box<T>& b, const Transform<T>& to_world) noexcept {
+    Box<T> w;
+    if (!(b.lo.x <= b.hi.x)) return w;
+    for (int c = 0; c < 8; ++c)
+        w.grow(to_world.point({(c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z}));
+    return w;
+}
+
 } // namespace isin
+
+// The members behind the interface above; each of these files holds nothing without it.
+#define ISIN_DETAIL_SCENE_CLASS
+#include "scene/build.hpp"
+#include "scene/trace.hpp"
+#include "scene/stream.hpp"
 
 // StandardScene's members come from isin::io where ISIN_COMPILED is defined (detail/compiled.hpp).
 #if defined(ISIN_COMPILED)
