@@ -31,7 +31,6 @@ ALLOWED = {
 # What exceeds a size limit today: header -> lines, (header, function name) -> lines.
 KNOWN_HEADERS = {
     "scene.hpp": 1158,
-    "bvh/triangle_bvh.hpp": 870,
 }
 KNOWN_FUNCTIONS = {
     ("indexed_mesh.hpp", "compute_normals"): 156,
