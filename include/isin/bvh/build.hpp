@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "../detail/attributes.hpp"
 #include "../detail/compiled.hpp"
 #include "../detail/huge_pages.hpp"
 #include "../detail/parallel.hpp"
@@ -259,23 +260,10 @@ private:
         int depth;
     };
 
-    // Binary SAH split of node prims[first, first + count), whose box and centroid bounds the
-    // caller knows: into two children (true; `left` and `right` then name them) or none (a
-    // leaf). One pass bins the centroids on all three axes; the sweep gives the children's boxes
-    // and centroid bounds, so no level re-reads its primitives for them. Below sah_depth, or when
-    // no axis can be binned (all centroids within rounding of each other), it splits at the
-    // median of the widest axis, which bounds the depth (and so the traversal stack) for any input.
-    bool split(Prims& prims, const Pending& at, Pending& left, Pending& right) {
-        BinaryNode<T>* const node = at.node;
-        const std::uint32_t first = node->first, count = node->count;
-        const Box<T>& box = node->box;
-        const Box<T>& centroids = at.centroids;
-        const int depth = at.depth;
-        if (count <= 2 && count <= std::uint32_t(leaf_size_)) return false;
-
-        Bins bin;
-        const Binning binning(centroids);
-        const bool binned = depth < sah_depth && binning.any();
+    // split's binning: the centroids of prims[first, first + count) into `bin` on every axis
+    // (each primitive keeps its bins, for the partition).
+    ISIN_DETAIL_INLINE void bin_node(Prims& prims, std::uint32_t first, std::uint32_t count, const Binning& binning,
+                                     Bins& bin) const {
         const auto bin_one = [&](Prim& p, Bins& into) {
             for (int a = 0; a < 3; ++a) {
                 const int k = binning.bin(p, a);
@@ -293,7 +281,7 @@ private:
             }
             for (; i < end; ++i) bin_one(prims[i], into);
         };
-        if (binned && threads_ > 1 && count >= parallel_bin_min) {
+        if (threads_ > 1 && count >= parallel_bin_min) {
             // The first splits, before the queue has work for every thread: binned in chunks
             // on all threads, the chunks' bins merged.
             std::mutex merging;
@@ -303,9 +291,29 @@ private:
                 const std::lock_guard<std::mutex> lock(merging);
                 bin.merge(part);
             });
-        } else if (binned) {
+        } else {
             bin_range(first, first + count, bin);
         }
+    }
+
+    // Binary SAH split of node prims[first, first + count), whose box and centroid bounds the
+    // caller knows: into two children (true; `left` and `right` then name them) or none (a
+    // leaf). One pass bins the centroids on all three axes; the sweep gives the children's boxes
+    // and centroid bounds, so no level re-reads its primitives for them. Below sah_depth, or when
+    // no axis can be binned (all centroids within rounding of each other), it splits at the
+    // median of the widest axis, which bounds the depth (and so the traversal stack) for any input.
+    bool split(Prims& prims, const Pending& at, Pending& left, Pending& right) {
+        BinaryNode<T>* const node = at.node;
+        const std::uint32_t first = node->first, count = node->count;
+        const Box<T>& box = node->box;
+        const Box<T>& centroids = at.centroids;
+        const int depth = at.depth;
+        if (count <= 2 && count <= std::uint32_t(leaf_size_)) return false;
+
+        Bins bin;
+        const Binning binning(centroids);
+        const bool binned = depth < sah_depth && binning.any();
+        if (binned) bin_node(prims, first, count, binning, bin);
         // Sweep: cost = Σ area · count over the two sides.
         T best_cost = std::numeric_limits<T>::infinity(), best_areas = best_cost;
         int best_axis = -1, best_split = 0;

@@ -570,6 +570,30 @@ inline float packet_t_far(const RayPacket& p) noexcept {
     return _mm_cvtss_f32(h);
 }
 
+/// Ray k of packet p as a single ray's slab terms (walk_packets: a ray that goes on alone).
+ISIN_DETAIL_INLINE SlabRay<float> packet_slab_ray(const RayPacket& p, int k) noexcept {
+    SlabRay<float> r;
+    for (int a = 0; a < 3; ++a) {
+        r.org[a] = p.org[a][k], r.inv[a] = p.inv[a][k], r.inv_far[a] = p.inv_far[a][k];
+        r.org_inv_near[a] = p.org_inv_near[a][k], r.org_inv_far[a] = p.org_inv_far[a][k];
+        r.near_plane[a] = p.near_plane[a], r.far_plane[a] = p.far_plane[a];
+    }
+    r.ok = true, r.robust = false;
+    return r;
+}
+
+/// Sorts the walk's entries stack[first, top) by descending t (insertion sort: a node's few
+/// children), so that the nearest is popped first.
+template <class Entry>
+ISIN_DETAIL_INLINE void sort_entries(Entry* stack, int first, int top) noexcept {
+    for (int i = first + 1; i < top; ++i) {
+        const Entry c = stack[i];
+        int j = i;
+        while (j > first && stack[j - 1].t < c.t) stack[j] = stack[j - 1], --j;
+        stack[j] = c;
+    }
+}
+
 /// walk_packets' default `soon`: no hint.
 struct NoLeafHint {
     void operator()(std::uint32_t) const noexcept {}
@@ -633,13 +657,7 @@ void walk_packets(const BvhTree<float>& tree, RayPacket* const (&ps)[N], const P
             for (unsigned rays = e.rays & lanes(); rays; rays &= rays - 1) { // each ray alone
                 const int i = lowest_bit(rays), k = i & 15;
                 RayPacket& p = *ps[std::size_t(i >> 4)];
-                SlabRay<float> r;
-                for (int a = 0; a < 3; ++a) {
-                    r.org[a] = p.org[a][k], r.inv[a] = p.inv[a][k], r.inv_far[a] = p.inv_far[a][k];
-                    r.org_inv_near[a] = p.org_inv_near[a][k], r.org_inv_far[a] = p.org_inv_far[a][k];
-                    r.near_plane[a] = p.near_plane[a], r.far_plane[a] = p.far_plane[a];
-                }
-                r.ok = true, r.robust = false;
+                const SlabRay<float> r = packet_slab_ray(p, k);
                 auto one = [&](std::uint32_t leaf_index, float&) {
                     return ((leaf(leaf_index, 1u << i) >> i) & 1u) != 0;
                 };
@@ -700,13 +718,7 @@ void walk_packets(const BvhTree<float>& tree, RayPacket* const (&ps)[N], const P
                     mask &= mask - 1;
                     stack[top++] = {n.child[k], t_near[k], rays[k], parent, std::uint32_t(k), tested[k]};
                 }
-                if constexpr (visit == Visit::nearest)
-                    for (int i = first + 1; i < top; ++i) { // insertion sort, descending t
-                        const Entry c = stack[i];
-                        int j = i;
-                        while (j > first && stack[j - 1].t < c.t) stack[j] = stack[j - 1], --j;
-                        stack[j] = c;
-                    }
+                if constexpr (visit == Visit::nearest) sort_entries(stack, first, top);
                 e = stack[--top];
                 continue;
             }
