@@ -43,28 +43,22 @@ ISIN_SIMD_INLINE T lane_fnmadd(T a, T b, T c) noexcept {
     return std::fma(-a, b, c);
 }
 
+// A register type V with intrinsics prefix_op_suffix: the same six operations for each.
+#define ISIN_SIMD_LANE_OPERATIONS(V, prefix, suffix)                                                                   \
+    ISIN_SIMD_INLINE V lane_mul(V a, V b) noexcept { return prefix##_mul_##suffix(a, b); }                             \
+    ISIN_SIMD_INLINE V lane_add(V a, V b) noexcept { return prefix##_add_##suffix(a, b); }                             \
+    ISIN_SIMD_INLINE V lane_sub(V a, V b) noexcept { return prefix##_sub_##suffix(a, b); }                             \
+    ISIN_SIMD_INLINE V lane_fmsub(V a, V b, V c) noexcept { return prefix##_fmsub_##suffix(a, b, c); }                 \
+    ISIN_SIMD_INLINE V lane_fma(V a, V b, V c) noexcept { return prefix##_fmadd_##suffix(a, b, c); }                   \
+    ISIN_SIMD_INLINE V lane_fnmadd(V a, V b, V c) noexcept { return prefix##_fnmadd_##suffix(a, b, c); }
 #if defined(__AVX2__) && defined(__FMA__) && !defined(ISIN_FORCE_PURE)
-ISIN_SIMD_INLINE __m256 lane_mul(__m256 a, __m256 b) noexcept { return _mm256_mul_ps(a, b); }
-ISIN_SIMD_INLINE __m256d lane_mul(__m256d a, __m256d b) noexcept { return _mm256_mul_pd(a, b); }
-ISIN_SIMD_INLINE __m256 lane_add(__m256 a, __m256 b) noexcept { return _mm256_add_ps(a, b); }
-ISIN_SIMD_INLINE __m256d lane_add(__m256d a, __m256d b) noexcept { return _mm256_add_pd(a, b); }
-ISIN_SIMD_INLINE __m256 lane_sub(__m256 a, __m256 b) noexcept { return _mm256_sub_ps(a, b); }
-ISIN_SIMD_INLINE __m256d lane_sub(__m256d a, __m256d b) noexcept { return _mm256_sub_pd(a, b); }
-ISIN_SIMD_INLINE __m256 lane_fmsub(__m256 a, __m256 b, __m256 c) noexcept { return _mm256_fmsub_ps(a, b, c); }
-ISIN_SIMD_INLINE __m256d lane_fmsub(__m256d a, __m256d b, __m256d c) noexcept { return _mm256_fmsub_pd(a, b, c); }
-ISIN_SIMD_INLINE __m256 lane_fma(__m256 a, __m256 b, __m256 c) noexcept { return _mm256_fmadd_ps(a, b, c); }
-ISIN_SIMD_INLINE __m256d lane_fma(__m256d a, __m256d b, __m256d c) noexcept { return _mm256_fmadd_pd(a, b, c); }
-ISIN_SIMD_INLINE __m256 lane_fnmadd(__m256 a, __m256 b, __m256 c) noexcept { return _mm256_fnmadd_ps(a, b, c); }
-ISIN_SIMD_INLINE __m256d lane_fnmadd(__m256d a, __m256d b, __m256d c) noexcept { return _mm256_fnmadd_pd(a, b, c); }
+ISIN_SIMD_LANE_OPERATIONS(__m256, _mm256, ps)
+ISIN_SIMD_LANE_OPERATIONS(__m256d, _mm256, pd)
 #if defined(__AVX512F__)
-ISIN_SIMD_INLINE __m512 lane_mul(__m512 a, __m512 b) noexcept { return _mm512_mul_ps(a, b); }
-ISIN_SIMD_INLINE __m512 lane_add(__m512 a, __m512 b) noexcept { return _mm512_add_ps(a, b); }
-ISIN_SIMD_INLINE __m512 lane_sub(__m512 a, __m512 b) noexcept { return _mm512_sub_ps(a, b); }
-ISIN_SIMD_INLINE __m512 lane_fmsub(__m512 a, __m512 b, __m512 c) noexcept { return _mm512_fmsub_ps(a, b, c); }
-ISIN_SIMD_INLINE __m512 lane_fma(__m512 a, __m512 b, __m512 c) noexcept { return _mm512_fmadd_ps(a, b, c); }
-ISIN_SIMD_INLINE __m512 lane_fnmadd(__m512 a, __m512 b, __m512 c) noexcept { return _mm512_fnmadd_ps(a, b, c); }
+ISIN_SIMD_LANE_OPERATIONS(__m512, _mm512, ps)
 #endif
 #endif
+#undef ISIN_SIMD_LANE_OPERATIONS
 
 /// a·b − c·d by Kahan's algorithm with fused multiply-subtract (Jeannerod, Louvet & Muller,
 /// "Further analysis of Kahan's algorithm for the accurate computation of 2×2 determinants",
