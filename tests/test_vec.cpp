@@ -7,6 +7,7 @@
 #include "support/approx.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 template <class T>
@@ -145,6 +146,56 @@ TEST_CASE_TEMPLATE("difference_of_products: exact sign where a fused or a plain 
     // 1 + 2^-k squared minus (1 + 2^-(k-1)): the 2^-2k that rounding a·b alone would lose.
     const T h = x - T(1);
     CHECK(isin::difference_of_products(x, x, T(1) + T(2) * h, T(1)) == h * h);
+}
+
+TEST_CASE_TEMPLATE("lane_difference_of_products: Kahan's algorithm, the same bits in every lane form", T, float,
+                   double) {
+    using P = CancellingProducts<T>;
+    const T x = T(1) + std::ldexp(T(1), -(std::numeric_limits<T>::digits / 2 + 1));
+    // a, b, c, d lane by lane: the cancelling products, equal products, zeros of either sign,
+    // ordinary values, an overflowing product.
+    const T big = std::numeric_limits<T>::max();
+    const T a[8] = {P::a, P::c, x, T(-0.0), T(0), T(0.1), T(30), big};
+    const T b[8] = {P::b, P::d, x, T(1), T(1), T(0.3), T(-80), T(2)};
+    const T c[8] = {P::c, P::a, x, T(0), T(-0.0), T(0.2), T(-80), T(1)};
+    const T d[8] = {P::d, P::b, x, T(1), T(1), T(0.7), T(-30), T(1)};
+    T one[8];
+    for (int k = 0; k < 8; ++k) one[k] = isin::detail::lane_difference_of_products(a[k], b[k], c[k], d[k]);
+    CHECK(one[0] == T(1)); // the exact sign where a plain or fused form gets it wrong
+    CHECK(one[1] == T(-1));
+    CHECK(one[2] == T(0));
+    CHECK(one[3] == T(0));
+    CHECK(one[4] == T(0));
+    CHECK(one[6] == T(-4800));
+    CHECK(!std::isfinite(one[7]));
+    if constexpr (std::is_same_v<T, double>) { // the double form is difference_of_products' own
+        for (int k = 0; k < 8; ++k) {
+            const T reference = isin::difference_of_products(a[k], b[k], c[k], d[k]);
+            CHECK(std::memcmp(&one[k], &reference, sizeof(T)) == 0);
+        }
+    }
+#if defined(__AVX2__) && defined(__FMA__) && !defined(ISIN_FORCE_PURE)
+    T lanes[8];
+    if constexpr (std::is_same_v<T, float>) {
+        _mm256_storeu_ps(lanes, isin::detail::lane_difference_of_products(_mm256_loadu_ps(a), _mm256_loadu_ps(b),
+                                                                          _mm256_loadu_ps(c), _mm256_loadu_ps(d)));
+    } else {
+        for (int h = 0; h < 8; h += 4)
+            _mm256_storeu_pd(lanes + h,
+                             isin::detail::lane_difference_of_products(_mm256_loadu_pd(a + h), _mm256_loadu_pd(b + h),
+                                                                       _mm256_loadu_pd(c + h), _mm256_loadu_pd(d + h)));
+    }
+    for (int k = 0; k < 8; ++k) CHECK(std::memcmp(&lanes[k], &one[k], sizeof(T)) == 0);
+#if defined(__AVX512F__)
+    if constexpr (std::is_same_v<T, float>) {
+        alignas(64) T a16[16], b16[16], c16[16], d16[16], wide[16];
+        for (int k = 0; k < 16; ++k) a16[k] = a[k % 8], b16[k] = b[k % 8], c16[k] = c[k % 8], d16[k] = d[k % 8];
+        _mm512_store_ps(wide, isin::detail::lane_difference_of_products(_mm512_load_ps(a16), _mm512_load_ps(b16),
+                                                                        _mm512_load_ps(c16), _mm512_load_ps(d16)));
+        for (int k = 0; k < 16; ++k) CHECK(std::memcmp(&wide[k], &one[k % 8], sizeof(T)) == 0);
+    }
+#endif
+#endif
 }
 
 TEST_CASE_TEMPLATE("max_of: the larger of two values; a NaN in either is the result", T, float, double) {

@@ -8,6 +8,7 @@
 
 #include "detail/attributes.hpp"
 #include "simd/pack.hpp"
+#include "simd/products.hpp"
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "ray.hpp"
@@ -174,6 +175,9 @@ struct WatertightShear {
     int kx = 0, ky = 1, kz = 2;
     T Sx = T(0), Sy = T(0), Sz = T(1);
 
+    /// Axis a of the sheared frame (0, 1, 2: kx, ky, kz).
+    [[nodiscard]] int axis(int a) const noexcept { return a == 0 ? kx : (a == 1 ? ky : kz); }
+
     /// Sets the shear for direction d; false (and no shear) for a zero direction. A direction
     /// with NaN along kz gets NaN shears, with which no triangle is hit (t is NaN).
     bool set(const Vertex<T>& d) noexcept {
@@ -188,6 +192,45 @@ struct WatertightShear {
     }
 };
 
+/// The three 2D edge functions U, V, W of a sheared triangle (WBW §3), of one value or a
+/// register of lanes.
+template <class L>
+struct WatertightEdges {
+    L U, V, W;
+};
+
+// The watertight test's formulas written once for the Bvh's ISA forms (triangles_avx2.hpp,
+// triangles_avx512.hpp); ShearedTriangle below is their one-value form.
+
+/// Vertex p of a register of triangles (`p(a)`: its components along the ray's axis a = 0, 1, 2,
+/// kx, ky, kz) relative to the ray's origin o, sheared onto the ray's frame (WBW §3): x, y
+/// across the ray, z along it (not yet scaled by Sz).
+template <class L, class Component>
+ISIN_DETAIL_INLINE void watertight_shear(const Component& p, L ox, L oy, L oz, L Sx, L Sy, L& x, L& y, L& z) noexcept {
+    z = lane_sub(p(2), oz);
+    x = lane_fnmadd(Sx, z, lane_sub(p(0), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
+    y = lane_fnmadd(Sy, z, lane_sub(p(1), oy)); // WBW: Ay = A[ky] − Sy·A[kz]
+}
+
+/// The edge functions of sheared vertices A, B, C (x, y of each), each a·b − c·d by
+/// `difference` with an exact sign (difference_of_products, lane_difference_of_products or the
+/// exact products of the lanes); the result takes the type `difference` returns.
+template <class L, class Difference>
+ISIN_DETAIL_INLINE auto watertight_edges(const L& Ax, const L& Ay, const L& Bx, const L& By, const L& Cx, const L& Cy,
+                                         Difference difference) noexcept {
+    using E = decltype(difference(Cx, By, Cy, Bx));
+    return WatertightEdges<E>{difference(Cx, By, Cy, Bx),  // WBW: U = Cx·By − Cy·Bx
+                              difference(Ax, Cy, Ay, Cx),  // WBW: V = Ax·Cy − Ay·Cx
+                              difference(Bx, Ay, By, Ax)}; // WBW: W = Bx·Ay − By·Ax
+}
+
+/// t·det (WBW §3): the edge functions weighting the vertices' depths Az, Bz, Cz along the ray
+/// (Az = Sz·A[kz]), each product added as lane_fma adds it.
+template <class L>
+ISIN_DETAIL_INLINE L watertight_t_det(L U, L V, L W, L Az, L Bz, L Cz) noexcept {
+    return lane_fma(W, Cz, lane_fma(V, Bz, lane_mul(U, Az))); // WBW: t·det = U·Az + V·Bz + W·Cz
+}
+
 /// Triangle A, B, C (vertices relative to the ray's origin) sheared onto the ray's frame (WBW
 /// §3): the vertices across the ray, and the three 2D edge functions, each with an exact sign.
 template <class T>
@@ -200,14 +243,14 @@ struct ShearedTriangle {
           Ay(component(A, s.ky) - s.Sy * component(A, s.kz)), Bx(component(B, s.kx) - s.Sx * component(B, s.kz)),
           By(component(B, s.ky) - s.Sy * component(B, s.kz)), Cx(component(C, s.kx) - s.Sx * component(C, s.kz)),
           Cy(component(C, s.ky) - s.Sy * component(C, s.kz)),
-          U(difference_of_products(Cx, By, Cy, Bx)), // WBW: edge functions, exact sign
+          U(difference_of_products(Cx, By, Cy, Bx)), // WBW: edge functions as watertight_edges, exact sign
           V(difference_of_products(Ax, Cy, Ay, Cx)), W(difference_of_products(Bx, Ay, By, Ax)) {}
 
     /// t·det: the edge functions weighting the vertices' depths along the ray (WBW: Az = Sz·A[kz]).
     [[nodiscard]] T t_det(const Vertex<T>& A, const Vertex<T>& B, const Vertex<T>& C,
                           const WatertightShear<T>& s) const noexcept {
         const T Az = s.Sz * component(A, s.kz), Bz = s.Sz * component(B, s.kz), Cz = s.Sz * component(C, s.kz);
-        return U * Az + V * Bz + W * Cz; // WBW: t·det
+        return U * Az + V * Bz + W * Cz; // WBW: t·det, as watertight_t_det where the compiler fuses
     }
 };
 

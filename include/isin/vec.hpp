@@ -3,6 +3,8 @@
 #include <cmath>
 #include <type_traits>
 
+#include "simd/products.hpp"
+
 namespace isin {
 
 /// A point or direction in the note's left-handed frame (+X right, +Y up, +Z forward).
@@ -120,16 +122,14 @@ template <class T>
 /// with floating point short of -ffast-math (it may fuse a plain `a*b - c*d` into one FMA, which
 /// rounds the two products differently and can flip the sign of a near-zero result). float:
 /// products of floats are exact in double. double: Kahan's algorithm with explicit std::fma
-/// (hardware with -mfma or -march=native, a library call otherwise).
+/// (hardware with -mfma or -march=native, a library call otherwise), as the Bvh's lanes compute
+/// it (detail::lane_difference_of_products, simd/products.hpp).
 template <class T>
 [[nodiscard]] inline T difference_of_products(T a, T b, T c, T d) noexcept {
     if constexpr (sizeof(T) < sizeof(double)) {
         return T(double(a) * double(b) - double(c) * double(d));
     } else {
-        const T cd = c * d;
-        const T error = std::fma(-c, d, cd); // exact: cd − c·d
-        const T ab_minus_cd = std::fma(a, b, -cd);
-        return ab_minus_cd + error;
+        return detail::lane_difference_of_products(a, b, c, d);
     }
 }
 

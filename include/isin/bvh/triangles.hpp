@@ -98,7 +98,7 @@ namespace detail {
 /// `cull`), their t, u, v in `out` unless `store` is false (then `out` may or may not be written:
 /// a caller that wants to know only whether anything is hit). The ray must be ready().
 // Forced inline (ISIN_DETAIL_INLINE), as is everything it runs on the hot path — Sheared8,
-// KahanEdges8, kahan_difference_of_products8/4, finish8, test_block_avx2 — and the Bvh's
+// kahan_edges8, finish8, test_block_avx2 and the formulas of triangle.hpp they run — and the Bvh's
 // lanes_hit and skip_lanes, so that every walk runs the leaf test in its own loop whatever else
 // the translation unit holds (walk_pair's comment); test_block_exact stays out of line (cold).
 template <bool cull, bool store = true, class T>

@@ -28,12 +28,9 @@ struct Sheared8 {
         const __m256 ox = _mm256_set1_ps(r.org[r.shear.kx]), oy = _mm256_set1_ps(r.org[r.shear.ky]);
         const __m256 oz = _mm256_set1_ps(r.org[r.shear.kz]);
         const __m256 Sx = _mm256_set1_ps(r.shear.Sx), Sy = _mm256_set1_ps(r.shear.Sy);
-        for (int v = 0; v < 3; ++v) {
-            z[v] = _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kz]), oz);
-            x[v] = _mm256_fnmadd_ps(
-                Sx, z[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.kx]), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
-            y[v] = _mm256_fnmadd_ps(Sy, z[v], _mm256_sub_ps(_mm256_load_ps(b.v[v][r.shear.ky]), oy));
-        }
+        for (int v = 0; v < 3; ++v)
+            watertight_shear([&](int a) ISIN_DETAIL_LAMBDA_INLINE { return _mm256_load_ps(b.v[v][r.shear.axis(a)]); },
+                             ox, oy, oz, Sx, Sy, x[v], y[v], z[v]);
     }
 };
 
@@ -54,14 +51,6 @@ inline __m256 exact_difference_of_products8(const Halves& a, const Halves& b, co
     return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
 }
 
-// a·b − c·d on 8 float lanes by Kahan's algorithm with FMA: the sign is exact unless a product
-// overflows or underflows float (then the result is not finite, or tiny).
-ISIN_DETAIL_INLINE __m256 kahan_difference_of_products8(__m256 a, __m256 b, __m256 c, __m256 d) noexcept {
-    const __m256 cd = _mm256_mul_ps(c, d);
-    const __m256 error = _mm256_fmsub_ps(c, d, cd); // c·d − cd, exact
-    return _mm256_sub_ps(_mm256_fmsub_ps(a, b, cd), error);
-}
-
 // The rest of the float test once U, V, W are known, as intersect_sheared: inside (all ≥ 0, or
 // all ≤ 0 unless culling), det ≠ 0, t = (U·Az + V·Bz + W·Cz)/det in (0, t_max); u = V/det,
 // v = W/det. Returns the lanes hit; fills `out` (when `store`) only when there are some.
@@ -77,9 +66,8 @@ ISIN_DETAIL_INLINE unsigned finish8(__m256 U, __m256 V, __m256 W, const __m256 (
     ok = _mm256_and_ps(ok, _mm256_cmp_ps(det, zero, _CMP_NEQ_OQ));
     if (_mm256_testz_ps(ok, ok)) return 0; // most blocks end here, before the division
     const __m256 S = _mm256_set1_ps(Sz);
-    const __m256 t_scaled = _mm256_fmadd_ps(
-        W, _mm256_mul_ps(S, z[2]),
-        _mm256_fmadd_ps(V, _mm256_mul_ps(S, z[1]), _mm256_mul_ps(U, _mm256_mul_ps(S, z[0])))); // WBW: t·det
+    const __m256 t_scaled =
+        watertight_t_det(U, V, W, _mm256_mul_ps(S, z[0]), _mm256_mul_ps(S, z[1]), _mm256_mul_ps(S, z[2]));
     const __m256 inv_det = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
     const __m256 t = _mm256_mul_ps(t_scaled, inv_det);
     ok = _mm256_and_ps(
@@ -93,13 +81,9 @@ ISIN_DETAIL_INLINE unsigned finish8(__m256 U, __m256 V, __m256 W, const __m256 (
 
 // The edge functions U, V, W of the 8 sheared triangles by Kahan's algorithm in float, four
 // operations each (test_block_avx2's fast form).
-struct KahanEdges8 {
-    __m256 U, V, W;
-    ISIN_DETAIL_INLINE explicit KahanEdges8(const Sheared8& p) noexcept
-        : U(kahan_difference_of_products8(p.x[2], p.y[1], p.y[2], p.x[1])),   // WBW: U = Cx·By − Cy·Bx
-          V(kahan_difference_of_products8(p.x[0], p.y[2], p.y[0], p.x[2])),   // WBW: V = Ax·Cy − Ay·Cx
-          W(kahan_difference_of_products8(p.x[1], p.y[0], p.y[1], p.x[0])) {} // WBW: W = Bx·Ay − By·Ax
-};
+ISIN_DETAIL_INLINE auto kahan_edges8(const Sheared8& p) noexcept {
+    return watertight_edges(p.x[0], p.y[0], p.x[1], p.y[1], p.x[2], p.y[2], LaneDifferenceOfProducts{});
+}
 
 // The lanes of a block test_block_avx2 does not trust (bits of `trusted` clear) tested with U,
 // V, W as difference_of_products<float> (exact products in double): there each lane computes
@@ -112,18 +96,17 @@ template <bool cull, bool store>
 ISIN_DETAIL_COLD unsigned test_block_exact(const TriangleBlock<float>& b, const TriangleRay<float>& r, unsigned trusted,
                                            float t_max, LaneHits<float>& out) noexcept {
     const Sheared8 p(b, r);
-    const KahanEdges8 kahan(p);
+    const auto kahan = kahan_edges8(p);
     const __m256 keep = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
         _mm256_and_si256(_mm256_set1_epi32(int(trusted)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
         _mm256_setzero_si256()));
     const Halves X0(p.x[0]), Y0(p.y[0]), X1(p.x[1]), Y1(p.y[1]), X2(p.x[2]), Y2(p.y[2]);
-    const __m256 U = _mm256_blendv_ps(exact_difference_of_products8(X2, Y1, Y2, X1), kahan.U, keep); // WBW: U
-    const __m256 V = _mm256_blendv_ps(exact_difference_of_products8(X0, Y2, Y0, X2), kahan.V, keep); // WBW: V
-    const __m256 W = _mm256_blendv_ps(exact_difference_of_products8(X1, Y0, Y1, X0), kahan.W, keep); // WBW: W
-    return finish8<cull, store>(U, V, W, p.z, r.shear.Sz, t_max, out);
+    const auto exact = watertight_edges(X0, Y0, X1, Y1, X2, Y2, exact_difference_of_products8);
+    return finish8<cull, store>(_mm256_blendv_ps(exact.U, kahan.U, keep), _mm256_blendv_ps(exact.V, kahan.V, keep),
+                                _mm256_blendv_ps(exact.W, kahan.W, keep), p.z, r.shear.Sz, t_max, out);
 }
 
-// The float test with U, V, W by Kahan's algorithm in float (KahanEdges8). Its sign is exact,
+// The float test with U, V, W by Kahan's algorithm in float (kahan_edges8). Its sign is exact,
 // so each lane decides as the exact test does, unless a product over- or underflowed float:
 // then det is not finite or an edge function is below 2^-126 in magnitude (exact zeros
 // included), and that lane is tested exactly (test_block_exact; D7: a vertex at 2e38).
@@ -131,7 +114,7 @@ template <bool cull, bool store>
 ISIN_DETAIL_INLINE unsigned test_block_avx2(const TriangleBlock<float>& b, const TriangleRay<float>& r, float t_max,
                                             LaneHits<float>& out) noexcept {
     const Sheared8 p(b, r);
-    const KahanEdges8 e(p);
+    const auto e = kahan_edges8(p);
     const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
     const __m256 smallest = _mm256_min_ps(_mm256_min_ps(_mm256_and_ps(e.U, magnitude), _mm256_and_ps(e.V, magnitude)),
                                           _mm256_and_ps(e.W, magnitude));
@@ -198,13 +181,6 @@ inline void set_shears(const float* x, const float* y, const float* z, ShearLane
     }
 }
 
-// a·b − c·d on 4 double lanes as difference_of_products<double> (Kahan's algorithm, FMA).
-ISIN_DETAIL_INLINE __m256d kahan_difference_of_products4(__m256d a, __m256d b, __m256d c, __m256d d) noexcept {
-    const __m256d cd = _mm256_mul_pd(c, d);
-    const __m256d error = _mm256_fmsub_pd(c, d, cd); // c·d − cd, exact
-    return _mm256_sub_pd(_mm256_fmsub_pd(a, b, cd), error);
-}
-
 // The double test as two halves of 4 lanes, as intersect_sheared (whose difference_of_products
 // is this same Kahan's algorithm); a half whose first lane is padding is skipped.
 template <bool cull, bool store>
@@ -217,15 +193,12 @@ ISIN_DETAIL_INLINE unsigned test_block_avx2(const TriangleBlock<double>& b, cons
     unsigned lanes = 0;
     for (int half = 0; half < 8 && !is_padding(b, half); half += 4) {
         __m256d x[3], y[3], z[3];
-        for (int v = 0; v < 3; ++v) {
-            z[v] = _mm256_sub_pd(_mm256_load_pd(b.v[v][r.shear.kz] + half), oz);
-            x[v] = _mm256_fnmadd_pd(
-                Sx, z[v], _mm256_sub_pd(_mm256_load_pd(b.v[v][r.shear.kx] + half), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
-            y[v] = _mm256_fnmadd_pd(Sy, z[v], _mm256_sub_pd(_mm256_load_pd(b.v[v][r.shear.ky] + half), oy));
-        }
-        const __m256d U = kahan_difference_of_products4(x[2], y[1], y[2], x[1]); // WBW: U = Cx·By − Cy·Bx
-        const __m256d V = kahan_difference_of_products4(x[0], y[2], y[0], x[2]); // WBW: V = Ax·Cy − Ay·Cx
-        const __m256d W = kahan_difference_of_products4(x[1], y[0], y[1], x[0]); // WBW: W = Bx·Ay − By·Ax
+        for (int v = 0; v < 3; ++v)
+            watertight_shear([&](int a)
+                                 ISIN_DETAIL_LAMBDA_INLINE { return _mm256_load_pd(b.v[v][r.shear.axis(a)] + half); },
+                             ox, oy, oz, Sx, Sy, x[v], y[v], z[v]);
+        const auto e = watertight_edges(x[0], y[0], x[1], y[1], x[2], y[2], LaneDifferenceOfProducts{});
+        const __m256d U = e.U, V = e.V, W = e.W;
         const __m256d det = _mm256_add_pd(_mm256_add_pd(U, V), W);
         const __m256d front = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(U, V), W), zero, _CMP_GE_OQ); // clockwise (§2)
         __m256d ok = front;
@@ -233,9 +206,8 @@ ISIN_DETAIL_INLINE unsigned test_block_avx2(const TriangleBlock<double>& b, cons
             ok = _mm256_or_pd(front, _mm256_cmp_pd(_mm256_max_pd(_mm256_max_pd(U, V), W), zero, _CMP_LE_OQ));
         ok = _mm256_and_pd(ok, _mm256_cmp_pd(det, zero, _CMP_NEQ_OQ));
         if (_mm256_testz_pd(ok, ok)) continue;
-        const __m256d t_scaled = _mm256_fmadd_pd(
-            W, _mm256_mul_pd(Sz, z[2]),
-            _mm256_fmadd_pd(V, _mm256_mul_pd(Sz, z[1]), _mm256_mul_pd(U, _mm256_mul_pd(Sz, z[0])))); // WBW: t·det
+        const __m256d t_scaled =
+            watertight_t_det(U, V, W, _mm256_mul_pd(Sz, z[0]), _mm256_mul_pd(Sz, z[1]), _mm256_mul_pd(Sz, z[2]));
         const __m256d inv_det = _mm256_div_pd(_mm256_set1_pd(1.0), det);
         const __m256d t = _mm256_mul_pd(t_scaled, inv_det);
         ok = _mm256_and_pd(

@@ -20,13 +20,6 @@ namespace detail {
 
 #define ISIN_DETAIL_TRIANGLE_PAIRS 1
 
-// a·b − c·d on 16 float lanes: kahan_difference_of_products8's operations.
-inline __m512 kahan_difference_of_products16(__m512 a, __m512 b, __m512 c, __m512 d) noexcept {
-    const __m512 cd = _mm512_mul_ps(c, d);
-    const __m512 error = _mm512_fmsub_ps(c, d, cd); // c·d − cd, exact
-    return _mm512_sub_ps(_mm512_fmsub_ps(a, b, cd), error);
-}
-
 // Sixteen lanes of a ray and a triangle each: test_block_avx2's operations on them.
 // `vertex(i, a)` gives the triangles' vertex i along the rays' axis a (0, 1, 2: kx, ky, kz).
 // Written out vertex by vertex: as loops, g++ -O2 kept the coordinates in memory.
@@ -36,14 +29,11 @@ struct Sheared16 {
     Sheared16(const Vertex& vertex, __m512 ox, __m512 oy, __m512 oz, __m512 Sx, __m512 Sy) noexcept {
         __m512 x[3], y[3]; // as Sheared8
         const auto shear = [&](int i) {
-            z[i] = _mm512_sub_ps(vertex(i, 2), oz);
-            x[i] = _mm512_fnmadd_ps(Sx, z[i], _mm512_sub_ps(vertex(i, 0), ox)); // WBW: Ax = A[kx] − Sx·A[kz]
-            y[i] = _mm512_fnmadd_ps(Sy, z[i], _mm512_sub_ps(vertex(i, 1), oy));
+            watertight_shear([&](int a) { return vertex(i, a); }, ox, oy, oz, Sx, Sy, x[i], y[i], z[i]);
         };
         shear(0), shear(1), shear(2);
-        U = kahan_difference_of_products16(x[2], y[1], y[2], x[1]); // WBW: U = Cx·By − Cy·Bx
-        V = kahan_difference_of_products16(x[0], y[2], y[0], x[2]); // WBW: V = Ax·Cy − Ay·Cx
-        W = kahan_difference_of_products16(x[1], y[0], y[1], x[0]); // WBW: W = Bx·Ay − By·Ax
+        const auto e = watertight_edges(x[0], y[0], x[1], y[1], x[2], y[2], LaneDifferenceOfProducts{});
+        U = e.U, V = e.V, W = e.W;
         det = _mm512_add_ps(_mm512_add_ps(U, V), W);
     }
     // test_block_avx2's trust: every edge function at least 2^-126 in magnitude, |det| < 2^126.
@@ -62,9 +52,8 @@ struct Sheared16 {
     }
     // finish8's second part: t (and 1/det, for u and v).
     __m512 t(__m512 Sz, __m512& inv_det) const noexcept {
-        const __m512 t_scaled = _mm512_fmadd_ps(
-            W, _mm512_mul_ps(Sz, z[2]),
-            _mm512_fmadd_ps(V, _mm512_mul_ps(Sz, z[1]), _mm512_mul_ps(U, _mm512_mul_ps(Sz, z[0])))); // WBW: t·det
+        const __m512 t_scaled =
+            watertight_t_det(U, V, W, _mm512_mul_ps(Sz, z[0]), _mm512_mul_ps(Sz, z[1]), _mm512_mul_ps(Sz, z[2]));
         inv_det = _mm512_div_ps(_mm512_set1_ps(1.0f), det);
         return _mm512_mul_ps(t_scaled, inv_det);
     }
