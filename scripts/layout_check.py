@@ -36,7 +36,6 @@ KNOWN_HEADERS = {
 KNOWN_FUNCTIONS = {
     ("bvh/build.hpp", "split"): 128,
     ("bvh/packet.hpp", "walk_packets"): 128,
-    ("io/image_check.hpp", "check_jpeg_scans"): 210,
 }
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
