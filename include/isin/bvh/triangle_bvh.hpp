@@ -719,7 +719,7 @@ private:
     // rays whose shears permute the axes alike at a time (most packets are one group). A group
     // with fewer rays than half the block's triangles is left to the rays one by one (two per
     // register): small groups leave most lanes of a triangle-by-triangle test empty, and a
-    // threshold of as many rays as triangles was slower on the large meshes.
+    // threshold of as many rays as triangles is slower on the large meshes.
     // Nearest hits go into `best` (keep_nearest in lanes) and lower t_far; occluded rays into
     // `done`. Returns the rays left for one by one: those groups, the rays some triangle's test
     // is not trusted for, and the rays without a shear.
@@ -813,12 +813,10 @@ private:
     void stream(const Rays& rays, std::size_t count, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
                 const HitFilter& filter) const noexcept {
         // After a chunk of incoherent rays the next three do not try a packet, after two such
-        // tries in a row the next seven, and so on up to 63: an incoherent stream (measured: 2-4%
-        // of its time in failed attempts when every chunk tried, 1-3% with a wait of three) mostly
-        // stays so. Coherent rays start again from three, also when their origins were too far
-        // apart for a packet: those are a few chunks at silhouettes, between chunks that form
-        // packets (measured, shadow rays of the trefoil: 14-23% slower when such chunks too made
-        // the next ones wait).
+        // tries in a row the next seven, and so on up to 63: an incoherent stream mostly stays so.
+        // Coherent rays start again from three, also when their origins were too far apart for a
+        // packet: those are a few chunks at silhouettes, between chunks that form packets
+        // (docs/performance.md).
         int wait = 0, backoff = 3;
         const auto chunk_size = [count](std::size_t first) {
             return first < count ? int(std::min<std::size_t>(16, count - first)) : 0;
