@@ -111,7 +111,7 @@ void smooth_shading(int threads, int repeats) {
                 median[2] / median[0]);
 }
 
-/// The renderer as it was before its tiles: each pixel's rays traced one by one (trace()), rows
+/// The renderer without tiles: each pixel's rays traced one by one (trace()), rows
 /// handed to `threads` threads from a shared counter. For an A/B in one process.
 template <class S>
 isin::Image render_per_pixel(const S& scene, const isin::Camera<typename S::value_type>& camera, int threads,

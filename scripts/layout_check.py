@@ -32,9 +32,6 @@ ALLOWED = {
 KNOWN_HEADERS = {
 }
 KNOWN_FUNCTIONS = {
-    ("indexed_mesh.hpp", "compute_normals"): 156,
-    ("io/image_check.hpp", "check_jpeg_scans"): 210,
-    ("render/stream.hpp", "trace_stream"): 136,
 }
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')

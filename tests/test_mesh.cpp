@@ -393,7 +393,7 @@ TEST_CASE_TEMPLATE("PLY binary big-endian: float, double, int16 data and uint8 l
     CHECK(big.indices[2] == std::array<std::uint32_t, 3>{0, 4, 1}); // the triangle after the quad's two
     CHECK(unsigned_area(big) == doctest::Approx(4 + 0.5 * std::sqrt(600.0 * 600.0 + 2.5 * 2.5))); // quad + triangle
 
-    // The same bytes through the file loaders: big-endian is no longer refused.
+    // The same bytes through the file loaders: big-endian is read, not refused.
     TempDir dir{"isin-test-mesh-"};
     const auto tris = isin::load_ply<T>(dir.put("big.ply", ply_test_file("binary_big_endian")));
     REQUIRE(tris.size() == 3);

@@ -171,7 +171,7 @@ TEST_CASE_TEMPLATE("§8 surface_band: from the error bounds, √3e·(2r + √3e)
     const T l2 = T(1e8), ulp = std::nextafter(l2, std::numeric_limits<T>::infinity()) - l2;
     CHECK(isin::surface_band(huge, l2) > T(4) * ulp);
     // … and within two ulps of the hit point's coordinates, not 64ε·|C| as a fixed multiple gave: a
-    // sphere of r = 1 at 1e3 has a band narrower than 2r·2·ulp(1e3) (was ~60× that in float).
+    // sphere of r = 1 at 1e3 has a band narrower than 2r·2·ulp(1e3) (the fixed multiple: ~60× that in float).
     const T ulp_1e3 = std::nextafter(T(1e3), T(2e3)) - T(1e3);
     CHECK(isin::surface_band(isin::Sphere<T>{{0, 0, T(1e3)}, 1}, T(1)) < T(2) * T(2) * ulp_1e3);
 }

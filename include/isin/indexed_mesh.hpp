@@ -145,109 +145,163 @@ ISIN_DETAIL_NOINLINE Vertex<W> unit_sum(const Vertex<W>& sum) noexcept {
 
 } // namespace detail
 
-/// Replaces mesh.normals by angle-weighted vertex normals (Thürmer & Wüthrich 1998), unit, on the
-/// front side of the §2 face normal N = (V1−V0) × (V2−V0) (clockwise seen from the viewer, left-handed).
-/// Around each vertex, faces that share an edge there and whose normals differ by at most
-/// crease_angle_degrees form one smooth fan; each further fan gets a copy of the vertex (position, uvs,
-/// colours copied, indices rewritten), so a cube at 60° has 24 vertices. Fans that share no smooth edge
-/// but whose normals agree within the angle (a fan with gaps, a bowtie) merge again, greedily in face
-/// order. 180 or more never splits.
-/// Zero-area and non-finite triangles contribute nothing; a vertex without a valid face gets (0,0,0).
-/// Smoothing follows indices, not positions: vertices already split (e.g. at uv seams) stay apart.
-/// Throws std::invalid_argument for a NaN angle or a mesh that fails validate() (its normals aside),
-/// std::length_error past 2^32 vertices or corners; on any throw the mesh is unchanged.
-/// The angle is not deduced, so a float mesh takes a double angle.
+namespace detail {
+
+/// Throws as mesh.validate() does, its normals aside (compute_normals replaces them anyway).
 template <class T>
-void compute_normals(Mesh<T>& mesh, std::common_type_t<T> crease_angle_degrees = T(60)) {
-    using U32 = std::uint32_t;
-    // Each face of a float mesh in double, where N = (V1−V0) × (V2−V0) can neither underflow nor overflow.
-    using W = std::conditional_t<sizeof(T) < sizeof(double), double, T>;
-    const auto wide = [](const Vertex<T>& a) { return Vertex<W>{W(a.x), W(a.y), W(a.z)}; };
-    const auto narrow = [](const Vertex<W>& a) { return Vertex<T>{T(a.x), T(a.y), T(a.z)}; };
-    const Vertex<T> zero{T(0), T(0), T(0)};
-
-    if (std::isnan(crease_angle_degrees)) throw std::invalid_argument("isin::compute_normals: the crease angle is NaN");
-    {
-        std::vector<Vertex<T>> old; // validate all but the normals, which are replaced anyway
-        old.swap(mesh.normals);
-        try {
-            mesh.validate();
-        } catch (...) {
-            mesh.normals.swap(old);
-            throw;
-        }
+void validate_but_normals(Mesh<T>& mesh) {
+    std::vector<Vertex<T>> old;
+    old.swap(mesh.normals);
+    try {
+        mesh.validate();
+    } catch (...) {
         mesh.normals.swap(old);
+        throw;
     }
-    const std::size_t nV = mesh.positions.size(), nF = mesh.indices.size();
-    constexpr std::size_t max_u32 = std::numeric_limits<U32>::max();
-    if (nF > max_u32 / 3) throw std::length_error("isin::compute_normals: more than 2^32 corners");
+    mesh.normals.swap(old);
+}
 
-    // Face f (§2), computed where needed, not stored; corner j's term; a sum made unit.
-    using Facet = detail::NormalFacet<W>;
-    const auto facet = [&](std::size_t f, Facet& F) {
+/// compute_normals' faces of a mesh: each face of a float mesh in double, where
+/// N = (V1−V0) × (V2−V0) can neither underflow nor overflow; terms and sums back in T.
+template <class T>
+struct NormalFaces {
+    using W = std::conditional_t<sizeof(T) < sizeof(double), double, T>;
+    using Facet = NormalFacet<W>;
+    const Mesh<T>& mesh;
+
+    static Vertex<W> wide(const Vertex<T>& a) noexcept { return Vertex<W>{W(a.x), W(a.y), W(a.z)}; }
+    static Vertex<T> narrow(const Vertex<W>& a) noexcept { return Vertex<T>{T(a.x), T(a.y), T(a.z)}; }
+    /// Face f (§2), computed where needed, not stored.
+    bool facet(std::size_t f, Facet& F) const noexcept {
         const Triangle<T> tri = mesh.triangle(f);
-        return detail::normal_facet(wide(tri.v0), wide(tri.v1), wide(tri.v2), F);
-    };
-    const auto term = [&](const Facet& F, std::size_t j) { return narrow(detail::corner_term(F, j)); };
-    const auto unit = [&](const Vertex<T>& sum) { return detail::unit_sum(wide(sum)); };
-
-    std::vector<Vertex<T>> normals(nV, zero);
-    Facet F{};
-    if (crease_angle_degrees >= T(180)) { // never split: one fan per vertex
-        for (std::size_t f = 0; f < nF; ++f)
-            if (facet(f, F))
-                for (std::size_t j = 0; j < 3; ++j) normals[mesh.indices[f][j]] += term(F, j); // T&W: Σ α·n̂
-        for (Vertex<T>& n : normals) n = narrow(unit(n)); // T&W: Σ α·n̂ / |Σ α·n̂|
-        mesh.normals = std::move(normals);
-        return;
+        return normal_facet(wide(tri.v0), wide(tri.v1), wide(tri.v2), F);
     }
+    /// Corner j's term.
+    Vertex<T> term(const Facet& F, std::size_t j) const noexcept { return narrow(corner_term(F, j)); }
+    /// A sum made unit.
+    Vertex<W> unit(const Vertex<T>& sum) const noexcept { return unit_sum(wide(sum)); }
+};
 
-    // Adjacent faces join when n̂f·n̂g ≥ cos θ; the few-ulp slack keeps coplanar faces together even at 0°.
-    const W pi = W(3.14159265358979323846264338327950288L);
-    const W theta = std::max(W(crease_angle_degrees), W(0)) * pi / W(180);
-    const W cos_limit = std::cos(theta) - W(8) * W(std::numeric_limits<T>::epsilon());
+/// compute_normals without creases: one fan per vertex.
+template <class T>
+[[nodiscard]] std::vector<Vertex<T>> smooth_normals(const NormalFaces<T>& faces) {
+    const Mesh<T>& mesh = faces.mesh;
+    const std::size_t nV = mesh.positions.size(), nF = mesh.indices.size();
+    std::vector<Vertex<T>> normals(nV, Vertex<T>{T(0), T(0), T(0)});
+    typename NormalFaces<T>::Facet F{};
+    for (std::size_t f = 0; f < nF; ++f)
+        if (faces.facet(f, F))
+            for (std::size_t j = 0; j < 3; ++j) normals[mesh.indices[f][j]] += faces.term(F, j); // T&W: Σ α·n̂
+    for (Vertex<T>& n : normals) n = faces.narrow(faces.unit(n)); // T&W: Σ α·n̂ / |Σ α·n̂|
+    return normals;
+}
 
-    // Counting sort of the corners c = 3f + j by vertex: fan[start[v] .. start[v+1]) are the corners at
-    // v in increasing c, so sums run in face order as in the path above.
-    std::vector<U32> start(nV + 1, 0);
-    for (const auto& tri : mesh.indices)
-        for (const U32 v : tri) ++start[v];
-    for (std::size_t v = 1; v < nV; ++v) start[v] += start[v - 1]; // end of each vertex's corners
-    if (nV > 0) start[nV] = start[nV - 1];
-    std::vector<U32> fan(3 * nF);
-    for (std::size_t c = 3 * nF; c-- > 0;) fan[--start[mesh.indices[c / 3][c % 3]]] = U32(c); // now start of each
+/// compute_normals with creases: the fans around each vertex, the copies they need and their normals.
+template <class T>
+struct FanSplit {
+    using U32 = std::uint32_t;
+    using W = typename NormalFaces<T>::W;
+    static constexpr std::size_t max_u32 = std::numeric_limits<U32>::max();
+    static constexpr U32 none = std::numeric_limits<U32>::max();
 
-    // Each vertex: union its valid corners whose faces share an edge there (the same other vertex) and
-    // differ by at most θ, then merge fans that agree within θ; each fan left is one normal. The fan of the
-    // first corner keeps the vertex, the others become copies nV, nV + 1, ... in order; degenerate corners
-    // stay with the vertex.
-    std::vector<U32> copy_of;                   // original vertex of each copy
-    std::vector<std::pair<U32, U32>> moved;     // (corner, copy) for the corners that move
+    NormalFaces<T> faces;
+    W cos_limit;                            // adjacent faces join when n̂f·n̂g ≥ cos θ
+    std::vector<U32> start, fan;            // the corners at v: fan[start[v] .. start[v+1])
+    std::vector<Vertex<T>> normals;         // per vertex, then per copy
+    std::vector<U32> copy_of;               // original vertex of each copy
+    std::vector<std::pair<U32, U32>> moved; // (corner, copy) for the corners that move
+
     std::vector<U32> corner, parent, label, nb; // per valid corner at the vertex (nb: its other two vertices)
     std::vector<U32> cluster, merged, keep;     // root → fan, fan → kept fan, kept fans
     std::vector<Vertex<W>> fn;                  // per valid corner at the vertex: its face's n̂
     std::vector<Vertex<T>> terms;               // per valid corner at the vertex: α·n̂
     std::vector<std::uint64_t> edges;           // (other vertex << 32 | corner), for large fans
     std::vector<Vertex<T>> sum;                 // per fan of the vertex
-    const U32 none = std::numeric_limits<U32>::max();
-    for (std::size_t v = 0; v < nV; ++v) {
+
+    FanSplit(const NormalFaces<T>& faces_, W cos_limit_)
+        : faces(faces_), cos_limit(cos_limit_), normals(faces_.mesh.positions.size(), Vertex<T>{T(0), T(0), T(0)}) {
+        sort_corners();
+    }
+
+    /// Counting sort of the corners c = 3f + j by vertex: fan[start[v] .. start[v+1]) are the corners at
+    /// v in increasing c, so sums run in face order as in smooth_normals.
+    void sort_corners() {
+        const Mesh<T>& mesh = faces.mesh;
+        const std::size_t nV = mesh.positions.size(), nF = mesh.indices.size();
+        start.assign(nV + 1, 0);
+        for (const auto& tri : mesh.indices)
+            for (const U32 v : tri) ++start[v];
+        for (std::size_t v = 1; v < nV; ++v) start[v] += start[v - 1]; // end of each vertex's corners
+        if (nV > 0) start[nV] = start[nV - 1];
+        fan.resize(3 * nF);
+        for (std::size_t c = 3 * nF; c-- > 0;) fan[--start[mesh.indices[c / 3][c % 3]]] = U32(c); // now start of each
+    }
+
+    /// Vertex v: union its valid corners whose faces share an edge there (the same other vertex) and
+    /// differ by at most θ, then merge fans that agree within θ; each fan left is one normal. The fan of
+    /// the first corner keeps the vertex, the others become copies nV, nV + 1, ... in order; degenerate
+    /// corners stay with the vertex.
+    void split_vertex(std::size_t v) {
+        const Mesh<T>& mesh = faces.mesh;
+        const std::size_t nV = mesh.positions.size();
+        typename NormalFaces<T>::Facet F{};
         corner.clear(), nb.clear(), fn.clear(), terms.clear();
         for (U32 i = start[v]; i < start[v + 1]; ++i) {
             const U32 c = fan[i];
-            if (!facet(c / 3, F)) continue;
+            if (!faces.facet(c / 3, F)) continue;
             const auto& tri = mesh.indices[c / 3];
             corner.push_back(c), nb.push_back(tri[(c + 1) % 3]), nb.push_back(tri[(c + 2) % 3]);
-            fn.push_back(F.n_hat), terms.push_back(term(F, c % 3));
+            fn.push_back(F.n_hat), terms.push_back(faces.term(F, c % 3));
         }
         const U32 k = U32(corner.size());
-        if (k == 0) continue;
+        if (k == 0) return;
         parent.resize(k), label.resize(k), merged.resize(k);
         std::iota(parent.begin(), parent.end(), U32(0));
+        join_smooth_corners(k);
+        // Fans: the components, numbered by their first corner, each with its sum (T&W: Σ α·n̂).
+        cluster.assign(k, none);
+        sum.clear();
+        for (U32 i = 0; i < k; ++i) {
+            const U32 root = fan_root(parent, i);
+            if (cluster[root] == none) {
+                cluster[root] = U32(sum.size());
+                sum.push_back(Vertex<T>{T(0), T(0), T(0)});
+            }
+            label[i] = cluster[root];
+            sum[label[i]] += terms[i]; // T&W: Σ α·n̂ over the fan
+        }
+        // Fans that share no smooth edge but agree within θ all the same (the arcs of a fan with gaps, a
+        // bowtie of one surface) merge, each into the first kept fan whose accumulated normal is that close.
+        keep.clear();
+        for (U32 m = 0; m < U32(sum.size()); ++m) {
+            const Vertex<W> n_m = faces.unit(sum[m]);
+            U32 q = 0;
+            while (q < keep.size() && !(dot(faces.unit(sum[keep[q]]), n_m) >= cos_limit)) ++q;
+            if (q < keep.size())
+                sum[keep[q]] += sum[m];
+            else
+                keep.push_back(m);
+            merged[m] = q;
+        }
+        const std::size_t first_copy = nV + copy_of.size();
+        if (keep.size() > 1 && first_copy + keep.size() - 2 > max_u32)
+            throw std::length_error("isin::compute_normals: more than 2^32 vertices after splitting");
+        for (U32 i = 0; i < k; ++i)
+            if (const U32 m = merged[label[i]]; m > 0) moved.emplace_back(corner[i], U32(first_copy + m - 1));
+        normals[v] = faces.narrow(faces.unit(sum[0])); // T&W: Σ α·n̂ / |Σ α·n̂|
+        for (std::size_t q = 1; q < keep.size(); ++q) {
+            copy_of.push_back(U32(v));
+            normals.push_back(faces.narrow(faces.unit(sum[keep[q]])));
+        }
+    }
+
+    /// Unites the first k valid corners at a vertex whose faces share an edge there and differ by at most θ.
+    void join_smooth_corners(U32 k) {
         const auto join = [&](U32 i, U32 j) {
             if (dot(fn[i], fn[j]) >= cos_limit) // VRML97 creaseAngle: n̂f·n̂g ≥ cos θ, smooth across the edge
-                parent[detail::fan_root(parent, i)] = detail::fan_root(parent, j);
+                parent[fan_root(parent, i)] = fan_root(parent, j);
         };
-        if (k <= detail::small_fan) {
+        if (k <= small_fan) {
             for (U32 i = 0; i < k; ++i)
                 for (U32 j = i + 1; j < k; ++j)
                     if (nb[2 * i] == nb[2 * j] || nb[2 * i] == nb[2 * j + 1] || nb[2 * i + 1] == nb[2 * j] ||
@@ -264,55 +318,60 @@ void compute_normals(Mesh<T>& mesh, std::common_type_t<T> crease_angle_degrees =
                     for (std::size_t q = p + 1; q < s; ++q) join(U32(edges[p] & max_u32), U32(edges[q] & max_u32));
             }
         }
-        // Fans: the components, numbered by their first corner, each with its sum (T&W: Σ α·n̂).
-        cluster.assign(k, none);
-        sum.clear();
-        for (U32 i = 0; i < k; ++i) {
-            const U32 root = detail::fan_root(parent, i);
-            if (cluster[root] == none) {
-                cluster[root] = U32(sum.size());
-                sum.push_back(zero);
-            }
-            label[i] = cluster[root];
-            sum[label[i]] += terms[i]; // T&W: Σ α·n̂ over the fan
-        }
-        // Fans that share no smooth edge but agree within θ all the same (the arcs of a fan with gaps, a
-        // bowtie of one surface) merge, each into the first kept fan whose accumulated normal is that close.
-        keep.clear();
-        for (U32 m = 0; m < U32(sum.size()); ++m) {
-            const Vertex<W> n_m = unit(sum[m]);
-            U32 q = 0;
-            while (q < keep.size() && !(dot(unit(sum[keep[q]]), n_m) >= cos_limit)) ++q;
-            if (q < keep.size())
-                sum[keep[q]] += sum[m];
-            else
-                keep.push_back(m);
-            merged[m] = q;
-        }
-        const std::size_t first_copy = nV + copy_of.size();
-        if (keep.size() > 1 && first_copy + keep.size() - 2 > max_u32)
-            throw std::length_error("isin::compute_normals: more than 2^32 vertices after splitting");
-        for (U32 i = 0; i < k; ++i)
-            if (const U32 m = merged[label[i]]; m > 0) moved.emplace_back(corner[i], U32(first_copy + m - 1));
-        normals[v] = narrow(unit(sum[0])); // T&W: Σ α·n̂ / |Σ α·n̂|
-        for (std::size_t q = 1; q < keep.size(); ++q) {
-            copy_of.push_back(U32(v));
-            normals.push_back(narrow(unit(sum[keep[q]])));
-        }
     }
 
-    // Commit: the reservations are the last steps that can throw, so a throw leaves the mesh as it was.
-    const std::size_t total = nV + copy_of.size();
-    mesh.positions.reserve(total);
-    if (!mesh.uvs.empty()) mesh.uvs.reserve(total);
-    if (!mesh.colors.empty()) mesh.colors.reserve(total);
-    for (const U32 s : copy_of) {
-        mesh.positions.push_back(mesh.positions[s]);
-        if (!mesh.uvs.empty()) mesh.uvs.push_back(mesh.uvs[s]);
-        if (!mesh.colors.empty()) mesh.colors.push_back(mesh.colors[s]);
+    /// Commit: the reservations are the last steps that can throw, so a throw leaves the mesh as it was.
+    void commit(Mesh<T>& mesh) {
+        const std::size_t total = mesh.positions.size() + copy_of.size();
+        mesh.positions.reserve(total);
+        if (!mesh.uvs.empty()) mesh.uvs.reserve(total);
+        if (!mesh.colors.empty()) mesh.colors.reserve(total);
+        for (const U32 s : copy_of) {
+            mesh.positions.push_back(mesh.positions[s]);
+            if (!mesh.uvs.empty()) mesh.uvs.push_back(mesh.uvs[s]);
+            if (!mesh.colors.empty()) mesh.colors.push_back(mesh.colors[s]);
+        }
+        for (const auto& [c, copy] : moved) mesh.indices[c / 3][c % 3] = copy;
+        mesh.normals = std::move(normals);
     }
-    for (const auto& [c, copy] : moved) mesh.indices[c / 3][c % 3] = copy;
-    mesh.normals = std::move(normals);
+};
+
+} // namespace detail
+
+/// Replaces mesh.normals by angle-weighted vertex normals (Thürmer & Wüthrich 1998), unit, on the
+/// front side of the §2 face normal N = (V1−V0) × (V2−V0) (clockwise seen from the viewer, left-handed).
+/// Around each vertex, faces that share an edge there and whose normals differ by at most
+/// crease_angle_degrees form one smooth fan; each further fan gets a copy of the vertex (position, uvs,
+/// colours copied, indices rewritten), so a cube at 60° has 24 vertices. Fans that share no smooth edge
+/// but whose normals agree within the angle (a fan with gaps, a bowtie) merge again, greedily in face
+/// order. 180 or more never splits.
+/// Zero-area and non-finite triangles contribute nothing; a vertex without a valid face gets (0,0,0).
+/// Smoothing follows indices, not positions: vertices already split (e.g. at uv seams) stay apart.
+/// Throws std::invalid_argument for a NaN angle or a mesh that fails validate() (its normals aside),
+/// std::length_error past 2^32 vertices or corners; on any throw the mesh is unchanged.
+/// The angle is not deduced, so a float mesh takes a double angle.
+template <class T>
+void compute_normals(Mesh<T>& mesh, std::common_type_t<T> crease_angle_degrees = T(60)) {
+    using W = typename detail::NormalFaces<T>::W;
+    if (std::isnan(crease_angle_degrees)) throw std::invalid_argument("isin::compute_normals: the crease angle is NaN");
+    detail::validate_but_normals(mesh);
+    constexpr std::size_t max_u32 = std::numeric_limits<std::uint32_t>::max();
+    if (mesh.indices.size() > max_u32 / 3) throw std::length_error("isin::compute_normals: more than 2^32 corners");
+
+    const detail::NormalFaces<T> faces{mesh};
+    if (crease_angle_degrees >= T(180)) { // never split: one fan per vertex
+        mesh.normals = detail::smooth_normals(faces);
+        return;
+    }
+
+    // Adjacent faces join when n̂f·n̂g ≥ cos θ; the few-ulp slack keeps coplanar faces together even at 0°.
+    const W pi = W(3.14159265358979323846264338327950288L);
+    const W theta = std::max(W(crease_angle_degrees), W(0)) * pi / W(180);
+    const W cos_limit = std::cos(theta) - W(8) * W(std::numeric_limits<T>::epsilon());
+
+    detail::FanSplit<T> split(faces, cos_limit);
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) split.split_vertex(v);
+    split.commit(mesh);
 }
 
 /// A mesh stored in a scene (Scene::add_mesh), to place again with add_instance.

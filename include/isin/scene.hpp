@@ -113,9 +113,8 @@ public:
     Color<T> ambient_light{T(1), T(1), T(1)}; // multiplies ka·colour (§7)
     TriangleMethod triangle_method = TriangleMethod::moller_trumbore;
     /// Triangle kinds with at least this many triangles are tested by the vectorised
-    /// TriangleBatch (Möller–Trumbore only); smaller ones one by one. Measured on Zen 4, nearest
-    /// hit of one ray: the batch wins from 4 triangles with -march=native (AVX-512) and from 4–8
-    /// with plain -O3 (SSE2); on the note's scene (3 + 2 triangles) the scalar loop wins.
+    /// TriangleBatch (Möller–Trumbore only); smaller ones one by one. The crossover:
+    /// docs/performance.md.
     std::size_t batch_min = 8;
     /// Triangle kinds with at least this many triangles get a Bvh when the scene is committed.
     /// The crossover: docs/meshes.md.

@@ -207,9 +207,8 @@ private:
     // set of bins costs more than it saves (docs/performance.md).
     static constexpr std::uint32_t two_bin_sets_min = 1024;
     // The partition looks at the sides of this many first primitives of a node, and goes
-    // without branches when a quarter of neighbours or more change side (see split). Measured:
-    // the random soup built 1.11-1.38x as fast (1.07-1.09 at two threads); the meshes whose
-    // neighbours share sides, where the plain partition's branches predict well, alike.
+    // without branches when a quarter of neighbours or more change side (see split): faster on a
+    // random soup, alike where the plain partition's branches predict well (docs/performance.md).
     static constexpr std::uint32_t coin_toss_sample = 32;
 
     // Where a centroid falls among the bins of each axis: ⌊(c − lo)·bins·(1 − ε)/extent⌋, computed

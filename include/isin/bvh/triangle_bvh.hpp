@@ -467,12 +467,10 @@ private:
     void stream(const Rays& rays, std::size_t count, const T* t_max, Hit<T>* hits, std::uint8_t* blocked,
                 const HitFilter& filter) const noexcept {
         // After a chunk of incoherent rays the next three do not try a packet, after two such
-        // tries in a row the next seven, and so on up to 63: an incoherent stream (measured: 2-4%
-        // of its time in failed attempts when every chunk tried, 1-3% with a wait of three) mostly
-        // stays so. Coherent rays start again from three, also when their origins were too far
-        // apart for a packet: those are a few chunks at silhouettes, between chunks that form
-        // packets (measured, shadow rays of the trefoil: 14-23% slower when such chunks too made
-        // the next ones wait).
+        // tries in a row the next seven, and so on up to 63: an incoherent stream mostly stays so.
+        // Coherent rays start again from three, also when their origins were too far apart for a
+        // packet: those are a few chunks at silhouettes, between chunks that form packets
+        // (docs/performance.md).
         int wait = 0, backoff = 3;
         const auto chunk_size = [count](std::size_t first) {
             return first < count ? int(std::min<std::size_t>(16, count - first)) : 0;

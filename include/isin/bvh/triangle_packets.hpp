@@ -332,7 +332,7 @@ struct BvhPackets {
     // rays whose shears permute the axes alike at a time (most packets are one group). A group
     // with fewer rays than half the block's triangles is left to the rays one by one (two per
     // register): small groups leave most lanes of a triangle-by-triangle test empty, and a
-    // threshold of as many rays as triangles was slower on the large meshes.
+    // threshold of as many rays as triangles is slower on the large meshes.
     // Nearest hits go into `best` (keep_nearest in lanes) and lower t_far; occluded rays into
     // `done`. Returns the rays left for one by one: those groups, the rays some triangle's test
     // is not trusted for, and the rays without a shear.

@@ -90,8 +90,8 @@ ISIN_DETAIL_INLINE auto kahan_edges8(const Sheared8& p) noexcept {
 // what intersect_sheared computes; the trusted lanes keep Kahan's U, V, W. So a triangle's
 // result is its own: it does not depend on the other triangles of its block (a packet tests only
 // the triangles its rays may reach, packet.hpp). It shears the block again rather than take
-// test_block_avx2's registers: passing them made the hot path store all nine to the stack
-// (single rays of the terrain 4% slower).
+// test_block_avx2's registers: passing them makes the hot path store all nine to the stack
+// (docs/performance.md).
 template <bool cull, bool store>
 ISIN_DETAIL_COLD unsigned test_block_exact(const TriangleBlock<float>& b, const TriangleRay<float>& r, unsigned trusted,
                                            float t_max, LaneHits<float>& out) noexcept {

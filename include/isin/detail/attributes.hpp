@@ -2,12 +2,12 @@
 /// isin — private: function attributes, where the compiler has them.
 ///  - ISIN_DETAIL_COLD: a rare path (an error, a fallback) kept out of line, so that the hot
 ///    loop around it stays small.
-///  - ISIN_DETAIL_INLINE: a function that must be inlined into its hot loop (measured: a call
-///    costs; compilers left some out of loops that grew). Only when optimising: an -O0 build
+///  - ISIN_DETAIL_INLINE: a function that must be inlined into its hot loop (a call there costs,
+///    and compilers leave some out of loops that grow). Only when optimising: an -O0 build
 ///    (the tests' debug and sanitizer builds) gains nothing from it and compiles slower.
 ///  - ISIN_DETAIL_LAMBDA_INLINE: the same for a lambda, written after its parameter list.
 ///  - ISIN_DETAIL_NOINLINE: a large function kept out of its caller, whose own loop it would
-///    otherwise crowd (measured: the stream calls' single-ray loop).
+///    otherwise crowd (the stream calls' single-ray loop).
 /// And detail::prefetch and prefetch_lines, cache hints.
 #include <cstddef>
 

@@ -246,42 +246,145 @@ struct JpegBits {
     }
 };
 
-/// Walks the entropy-coded data of every scan of a JPEG that check_jpeg's structural pass has
-/// accepted, decoding its Huffman codes (T.81 F.2.2, G.1.2) as stb 2.27 parses them, without the
-/// coefficients' values: "" if every restart interval holds all the bits its blocks take, else why
-/// not. stb reads zero bits past the data instead of failing, and when a code or a magnitude
-/// straddles the marker that ends the data its bit count goes negative (a shift by 32 or more in
-/// stbi__grow_buffer_unsafe, undefined behaviour; fixed in stb 2.28); refusing truncated intervals
-/// here keeps stb away from that state. For progressive files it keeps which coefficients are
-/// non-zero (8 bytes a block, 1/16 of stb's coefficients), since refinement scans read one bit per
-/// non-zero coefficient: AC scans must follow the component's first DC scan (before it stb reads
-/// memory it never wrote) and coefficients must fit stb's 16 bits. It also refuses DC predictions
-/// whose sum, or product with the quantiser (progressive: 2^Al), overflows stb's int (stb 2.28
-/// checks both too).
-[[nodiscard]] inline std::string check_jpeg_scans(const unsigned char* p, std::size_t n) {
-    const std::string truncated = "truncated or corrupt JPEG: a scan's data ends inside a block";
+/// A frame's component as check_jpeg_scans tracks it.
+struct JpegComponent {
+    unsigned id = 0, h = 1, v = 1, tq = 0;
+    bool dc_scanned = false;
+    std::int64_t dc_pred = 0;             // stb's DC prediction, an int
+    std::vector<std::bitset<64>> nonzero; // progressive: per block, in zig-zag order
+};
+
+/// A scan's component with its Huffman tables.
+struct JpegScanComponent {
+    JpegComponent* c;
+    const JpegHuffman *dc, *ac;
+};
+
+/// One scan's entropy-coded data, block by block (check_jpeg_scans). Each step returns 0, or 1 past
+/// the end of the data, 2 where stb refuses the data, 3 for a coefficient past stb's int (DC) or
+/// short (AC).
+struct JpegScanBlocks {
+    JpegBits in;
+    bool progressive;
+    unsigned ss, se, ah, al;
+    const std::int64_t* quant_dc; // the DC entry of each quantisation table
+    std::uint32_t eob_run = 0;
+    std::bitset<64> band{}; // the scan's coefficients, in zig-zag order
+
+    /// One block of the scan's component `c`, at `b` in its block grid.
+    [[nodiscard]] int block(const JpegScanComponent& c, std::size_t b) noexcept {
+        if (!progressive || ss == 0) return dc_block(c, b); // DC, then (baseline) the AC coefficients
+        std::bitset<64>& nz = c.c->nonzero[b];
+        if (ah == 0) return first_ac_block(c, nz); // first AC scan of the band
+        return refine_ac_block(c, nz);
+    }
+
+    /// The DC coefficient, then (baseline) the AC coefficients.
+    [[nodiscard]] int dc_block(const JpegScanComponent& c, std::size_t b) noexcept {
+        std::uint32_t v = 0;
+        if (progressive && ah != 0) return in.bits(1, v) ? 0 : 1; // DC refinement: one bit
+        if (progressive) c.c->nonzero[b].reset();
+        const int t = in.decode(*c.dc);
+        if (t < -1) return 1;
+        if (t < 0 || t > 15) return 2;
+        if (!in.bits(unsigned(t), v)) return 1;
+        const std::int64_t diff =
+            t == 0 || v >> (t - 1) ? std::int64_t(v) : std::int64_t(v) - (std::int64_t(1) << t) + 1;
+        c.c->dc_pred += diff; // then times the quantiser (baseline) or 2^Al (progressive), in int
+        const std::int64_t scaled = c.c->dc_pred * (progressive ? std::int64_t(1) << al : quant_dc[c.c->tq]);
+        if (c.c->dc_pred < INT32_MIN || c.c->dc_pred > INT32_MAX || scaled < INT32_MIN || scaled > INT32_MAX) return 3;
+        for (unsigned k = 1; !progressive && k < 64;) {
+            const int rs = in.decode(*c.ac);
+            if (rs < -1) return 1;
+            if (rs < 0) return 2;
+            if ((rs & 15) == 0) {
+                if (rs != 0xf0) break;
+                k += 16;
+            } else {
+                k += unsigned(rs >> 4) + 1;
+                if (!in.bits(unsigned(rs & 15), v)) return 1;
+            }
+        }
+        return 0;
+    }
+
+    /// A block of the first AC scan of the band.
+    [[nodiscard]] int first_ac_block(const JpegScanComponent& c, std::bitset<64>& nz) noexcept {
+        std::uint32_t v = 0;
+        if (eob_run) return --eob_run, 0;
+        unsigned k = ss;
+        do {
+            const int rs = in.decode(*c.ac);
+            if (rs < -1) return 1;
+            if (rs < 0) return 2;
+            const unsigned r = unsigned(rs) >> 4, bits = unsigned(rs) & 15;
+            if (bits == 0) {
+                if (r < 15) {
+                    if (!in.bits(r, v)) return 1;
+                    eob_run = (std::uint32_t(1) << r) + v - 1;
+                    break;
+                }
+                k += 16;
+            } else {
+                k += r;
+                if (!in.bits(bits, v)) return 1;
+                const std::uint32_t magnitude = v >> (bits - 1) ? v : (std::uint32_t(1) << bits) - 1 - v;
+                if ((magnitude << al) > 32767) return 3; // stb keeps coefficients in 16 bits
+                nz.set(std::min(k, 63u));                // stb puts a run past the block on its last coefficient
+                ++k;
+            }
+        } while (k <= se);
+        return 0;
+    }
+
+    /// A block of a refinement AC scan.
+    [[nodiscard]] int refine_ac_block(const JpegScanComponent& c, std::bitset<64>& nz) noexcept {
+        std::uint32_t v = 0;
+        if (eob_run) { // refinement: a correction bit for each non-zero coefficient of the band
+            --eob_run;
+            return in.skip(unsigned((nz & band).count())) ? 0 : 1;
+        }
+        unsigned k = ss;
+        do {
+            const int rs = in.decode(*c.ac);
+            if (rs < -1) return 1;
+            if (rs < 0) return 2;
+            unsigned r = unsigned(rs) >> 4;
+            const unsigned bits = unsigned(rs) & 15;
+            if (bits == 0 && r < 15) {
+                if (!in.bits(r, v)) return 1;
+                eob_run = (std::uint32_t(1) << r) - 1 + v;
+                r = 64;
+            } else if (bits != 0) {
+                if (bits != 1) return 2;
+                if (!in.bits(1, v)) return 1;
+            }
+            while (k <= se) {
+                const unsigned z = k++;
+                if (nz.test(z)) {
+                    if (!in.bits(1, v)) return 1;
+                } else if (r == 0) {
+                    if (bits) nz.set(z);
+                    break;
+                } else {
+                    --r;
+                }
+            }
+        } while (k <= se);
+        return 0;
+    }
+};
+
+/// The frame and tables of a JPEG as check_jpeg_scans reads them, segment by segment.
+struct JpegScanCheck {
     JpegHuffman tables[2][4];
     unsigned restart_interval = 0, width = 0, height = 0, components = 0, h_max = 1, v_max = 1;
     std::int64_t quant_dc[4] = {}; // the DC entry of each quantisation table
     bool progressive = false;
-    struct Component {
-        unsigned id = 0, h = 1, v = 1, tq = 0;
-        bool dc_scanned = false;
-        std::int64_t dc_pred = 0;             // stb's DC prediction, an int
-        std::vector<std::bitset<64>> nonzero; // progressive: per block, in zig-zag order
-    } comp[4];
-    std::size_t pos = 2;
-    for (;;) {
-        while (pos < n && p[pos] != 0xff) ++pos;
-        while (pos < n && p[pos] == 0xff) ++pos;
-        if (pos >= n) return "";
-        const unsigned marker = p[pos++];
-        if (marker == 0xd9) return "";
-        if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd8)) continue;
-        const std::size_t length = big_endian16(p + pos); // within the data: check_jpeg's first pass
-        const unsigned char* s = p + pos + 2;
-        const std::size_t size = length - 2;
-        pos += length;
+    JpegComponent comp[4];
+
+    /// A DHT, DQT, DRI or SOF segment's body s of `size` bytes: "" or why it is refused.
+    [[nodiscard]] std::string segment(unsigned marker, const unsigned char* s, std::size_t size) {
         if (marker == 0xc4) {
             for (std::size_t k = 0; k < size;) {
                 std::size_t codes = 0;
@@ -306,166 +409,103 @@ struct JpegBits {
                     return "malformed JPEG: bad sampling factors in the frame header";
                 h_max = std::max(h_max, comp[i].h), v_max = std::max(v_max, comp[i].v);
             }
-        } else if (marker == 0xda) {
-            const unsigned count = s[0], ss = s[1 + 2 * count], se = s[2 + 2 * count];
-            const unsigned ah = s[3 + 2 * count] >> 4, al = s[3 + 2 * count] & 15u;
-            if (count < 1 || count > components) return "malformed JPEG: bad component count in a scan header";
-            if (progressive
-                    ? (ss > se || se > 63 || ah > 13 || al > 13 || (ss == 0 && se != 0) || (ss != 0 && count != 1))
-                    : (ss != 0 || ah != 0 || al != 0))
-                return "corrupt JPEG: bad spectral selection or successive approximation in a scan header";
-            const unsigned mcu_x = (width + 8 * h_max - 1) / (8 * h_max),
-                           mcu_y = (height + 8 * v_max - 1) / (8 * v_max);
-            struct ScanComponent {
-                Component* c;
-                const JpegHuffman *dc, *ac;
-            } sc[4] = {};
-            for (unsigned i = 0; i < count; ++i) {
-                for (unsigned j = 0; j < components; ++j)
-                    if (comp[j].id == s[1 + 2 * i]) sc[i].c = &comp[j];
-                const unsigned dc = s[2 + 2 * i] >> 4, ac = s[2 + 2 * i] & 15u;
-                if (dc > 3 || ac > 3) return "malformed JPEG: bad Huffman table id in a scan header"; // stb's too
-                sc[i].dc = &tables[0][dc], sc[i].ac = &tables[1][ac];
-                if (progressive && sc[i].c->nonzero.empty())
-                    sc[i].c->nonzero.resize(std::size_t(mcu_x) * sc[i].c->h * mcu_y * sc[i].c->v);
-                if (progressive && ss != 0 && !sc[i].c->dc_scanned)
-                    return "corrupt JPEG: an AC scan comes before the component's first DC scan";
-            }
-            // the data: one restart interval after another, each ended by an RSTn marker
-            JpegMarkerAt at = next_jpeg_marker(p, n, pos);
-            JpegBits in{p + pos, p + at.end};
-            std::uint32_t eob_run = 0;
-            for (Component& c : comp) c.dc_pred = 0;
-            std::bitset<64> band; // the scan's coefficients, in zig-zag order
-            for (unsigned k = ss; k <= std::min(se, 63u); ++k) band.set(k);
-            // one block of the scan's component `c`, at `b` in its block grid: 0, or 1 past the end
-            // of the data, 2 where stb refuses the data, 3 for a coefficient past stb's int (DC) or
-            // short (AC)
-            const auto block = [&](const ScanComponent& c, std::size_t b) -> int {
-                std::uint32_t v = 0;
-                if (!progressive || ss == 0) {                                // DC, then (baseline) the AC coefficients
-                    if (progressive && ah != 0) return in.bits(1, v) ? 0 : 1; // DC refinement: one bit
-                    if (progressive) c.c->nonzero[b].reset();
-                    const int t = in.decode(*c.dc);
-                    if (t < -1) return 1;
-                    if (t < 0 || t > 15) return 2;
-                    if (!in.bits(unsigned(t), v)) return 1;
-                    const std::int64_t diff =
-                        t == 0 || v >> (t - 1) ? std::int64_t(v) : std::int64_t(v) - (std::int64_t(1) << t) + 1;
-                    c.c->dc_pred += diff; // then times the quantiser (baseline) or 2^Al (progressive), in int
-                    const std::int64_t scaled =
-                        c.c->dc_pred * (progressive ? std::int64_t(1) << al : quant_dc[c.c->tq]);
-                    if (c.c->dc_pred < INT32_MIN || c.c->dc_pred > INT32_MAX || scaled < INT32_MIN ||
-                        scaled > INT32_MAX)
-                        return 3;
-                    for (unsigned k = 1; !progressive && k < 64;) {
-                        const int rs = in.decode(*c.ac);
-                        if (rs < -1) return 1;
-                        if (rs < 0) return 2;
-                        if ((rs & 15) == 0) {
-                            if (rs != 0xf0) break;
-                            k += 16;
-                        } else {
-                            k += unsigned(rs >> 4) + 1;
-                            if (!in.bits(unsigned(rs & 15), v)) return 1;
-                        }
-                    }
-                    return 0;
-                }
-                std::bitset<64>& nz = c.c->nonzero[b];
-                if (ah == 0) { // first AC scan of the band
-                    if (eob_run) return --eob_run, 0;
-                    unsigned k = ss;
-                    do {
-                        const int rs = in.decode(*c.ac);
-                        if (rs < -1) return 1;
-                        if (rs < 0) return 2;
-                        const unsigned r = unsigned(rs) >> 4, bits = unsigned(rs) & 15;
-                        if (bits == 0) {
-                            if (r < 15) {
-                                if (!in.bits(r, v)) return 1;
-                                eob_run = (std::uint32_t(1) << r) + v - 1;
-                                break;
-                            }
-                            k += 16;
-                        } else {
-                            k += r;
-                            if (!in.bits(bits, v)) return 1;
-                            const std::uint32_t magnitude = v >> (bits - 1) ? v : (std::uint32_t(1) << bits) - 1 - v;
-                            if ((magnitude << al) > 32767) return 3; // stb keeps coefficients in 16 bits
-                            nz.set(std::min(k, 63u)); // stb puts a run past the block on its last coefficient
-                            ++k;
-                        }
-                    } while (k <= se);
-                    return 0;
-                }
-                if (eob_run) { // refinement: a correction bit for each non-zero coefficient of the band
-                    --eob_run;
-                    return in.skip(unsigned((nz & band).count())) ? 0 : 1;
-                }
-                unsigned k = ss;
-                do {
-                    const int rs = in.decode(*c.ac);
-                    if (rs < -1) return 1;
-                    if (rs < 0) return 2;
-                    unsigned r = unsigned(rs) >> 4;
-                    const unsigned bits = unsigned(rs) & 15;
-                    if (bits == 0 && r < 15) {
-                        if (!in.bits(r, v)) return 1;
-                        eob_run = (std::uint32_t(1) << r) - 1 + v;
-                        r = 64;
-                    } else if (bits != 0) {
-                        if (bits != 1) return 2;
-                        if (!in.bits(1, v)) return 1;
-                    }
-                    while (k <= se) {
-                        const unsigned z = k++;
-                        if (nz.test(z)) {
-                            if (!in.bits(1, v)) return 1;
-                        } else if (r == 0) {
-                            if (bits) nz.set(z);
-                            break;
-                        } else {
-                            --r;
-                        }
-                    }
-                } while (k <= se);
-                return 0;
-            };
-            // the MCUs as stb orders them: a lone component's blocks row by row, else interleaved
-            const Component& one = *sc[0].c;
-            const std::size_t one_w = ((std::size_t(width) * one.h + h_max - 1) / h_max + 7) / 8;
-            const std::size_t one_h = ((std::size_t(height) * one.v + v_max - 1) / v_max + 7) / 8;
-            const std::size_t mcus = count == 1 ? one_w * one_h : std::size_t(mcu_x) * mcu_y;
-            unsigned todo = restart_interval;
-            for (std::size_t m = 0; m < mcus; ++m) {
-                for (unsigned i = 0; i < count; ++i) {
-                    const Component& c = *sc[i].c;
-                    const std::size_t grid_w = std::size_t(mcu_x) * c.h;
-                    const unsigned bw = count == 1 ? 1 : c.h, bh = count == 1 ? 1 : c.v;
-                    const std::size_t x0 = count == 1 ? m % one_w : m % mcu_x * c.h;
-                    const std::size_t y0 = count == 1 ? m / one_w : m / mcu_x * c.v;
-                    for (unsigned y = 0; y < bh; ++y)
-                        for (unsigned x = 0; x < bw; ++x)
-                            if (const int r = block(sc[i], (y0 + y) * grid_w + x0 + x))
-                                return r == 1   ? truncated
-                                       : r == 2 ? "corrupt JPEG: bad Huffman-coded data in a scan"
-                                                : "corrupt JPEG: a coefficient out of range";
-                }
-                if (restart_interval && --todo == 0 && m + 1 < mcus) { // the next interval, after RSTn
-                    if (at.end == n || at.code < 0xd0 || at.code > 0xd7)
-                        return "truncated or corrupt JPEG: a scan has fewer restart intervals than its blocks need";
-                    const std::size_t from = at.next;
-                    at = next_jpeg_marker(p, n, from);
-                    in = JpegBits{p + from, p + at.end};
-                    eob_run = 0, todo = restart_interval;
-                    for (Component& k : comp) k.dc_pred = 0;
-                }
-            }
-            if (progressive && ss == 0 && ah == 0)
-                for (unsigned i = 0; i < count; ++i) sc[i].c->dc_scanned = true;
-            pos = end_of_scan_data(p, n, at.end).end; // past the RSTn markers the scan did not need
         }
+        return "";
+    }
+
+    /// The scan whose header s is, with its data from p[pos]: "" or why it is refused; pos past the
+    /// scan's data.
+    [[nodiscard]] std::string scan(const unsigned char* p, std::size_t n, std::size_t& pos, const unsigned char* s) {
+        const char* const truncated = "truncated or corrupt JPEG: a scan's data ends inside a block";
+        const unsigned count = s[0], ss = s[1 + 2 * count], se = s[2 + 2 * count];
+        const unsigned ah = s[3 + 2 * count] >> 4, al = s[3 + 2 * count] & 15u;
+        if (count < 1 || count > components) return "malformed JPEG: bad component count in a scan header";
+        if (progressive ? (ss > se || se > 63 || ah > 13 || al > 13 || (ss == 0 && se != 0) || (ss != 0 && count != 1))
+                        : (ss != 0 || ah != 0 || al != 0))
+            return "corrupt JPEG: bad spectral selection or successive approximation in a scan header";
+        const unsigned mcu_x = (width + 8 * h_max - 1) / (8 * h_max), mcu_y = (height + 8 * v_max - 1) / (8 * v_max);
+        JpegScanComponent sc[4] = {};
+        for (unsigned i = 0; i < count; ++i) {
+            for (unsigned j = 0; j < components; ++j)
+                if (comp[j].id == s[1 + 2 * i]) sc[i].c = &comp[j];
+            const unsigned dc = s[2 + 2 * i] >> 4, ac = s[2 + 2 * i] & 15u;
+            if (dc > 3 || ac > 3) return "malformed JPEG: bad Huffman table id in a scan header"; // stb's too
+            sc[i].dc = &tables[0][dc], sc[i].ac = &tables[1][ac];
+            if (progressive && sc[i].c->nonzero.empty())
+                sc[i].c->nonzero.resize(std::size_t(mcu_x) * sc[i].c->h * mcu_y * sc[i].c->v);
+            if (progressive && ss != 0 && !sc[i].c->dc_scanned)
+                return "corrupt JPEG: an AC scan comes before the component's first DC scan";
+        }
+        // the data: one restart interval after another, each ended by an RSTn marker
+        JpegMarkerAt at = next_jpeg_marker(p, n, pos);
+        JpegScanBlocks blocks{JpegBits{p + pos, p + at.end}, progressive, ss, se, ah, al, quant_dc};
+        for (JpegComponent& c : comp) c.dc_pred = 0;
+        for (unsigned k = ss; k <= std::min(se, 63u); ++k) blocks.band.set(k);
+        // the MCUs as stb orders them: a lone component's blocks row by row, else interleaved
+        const JpegComponent& one = *sc[0].c;
+        const std::size_t one_w = ((std::size_t(width) * one.h + h_max - 1) / h_max + 7) / 8;
+        const std::size_t one_h = ((std::size_t(height) * one.v + v_max - 1) / v_max + 7) / 8;
+        const std::size_t mcus = count == 1 ? one_w * one_h : std::size_t(mcu_x) * mcu_y;
+        unsigned todo = restart_interval;
+        for (std::size_t m = 0; m < mcus; ++m) {
+            for (unsigned i = 0; i < count; ++i) {
+                const JpegComponent& c = *sc[i].c;
+                const std::size_t grid_w = std::size_t(mcu_x) * c.h;
+                const unsigned bw = count == 1 ? 1 : c.h, bh = count == 1 ? 1 : c.v;
+                const std::size_t x0 = count == 1 ? m % one_w : m % mcu_x * c.h;
+                const std::size_t y0 = count == 1 ? m / one_w : m / mcu_x * c.v;
+                for (unsigned y = 0; y < bh; ++y)
+                    for (unsigned x = 0; x < bw; ++x)
+                        if (const int r = blocks.block(sc[i], (y0 + y) * grid_w + x0 + x))
+                            return r == 1   ? truncated
+                                   : r == 2 ? "corrupt JPEG: bad Huffman-coded data in a scan"
+                                            : "corrupt JPEG: a coefficient out of range";
+            }
+            if (restart_interval && --todo == 0 && m + 1 < mcus) { // the next interval, after RSTn
+                if (at.end == n || at.code < 0xd0 || at.code > 0xd7)
+                    return "truncated or corrupt JPEG: a scan has fewer restart intervals than its blocks need";
+                const std::size_t from = at.next;
+                at = next_jpeg_marker(p, n, from);
+                blocks.in = JpegBits{p + from, p + at.end};
+                blocks.eob_run = 0, todo = restart_interval;
+                for (JpegComponent& k : comp) k.dc_pred = 0;
+            }
+        }
+        if (progressive && ss == 0 && ah == 0)
+            for (unsigned i = 0; i < count; ++i) sc[i].c->dc_scanned = true;
+        pos = end_of_scan_data(p, n, at.end).end; // past the RSTn markers the scan did not need
+        return "";
+    }
+};
+
+/// Walks the entropy-coded data of every scan of a JPEG that check_jpeg's structural pass has
+/// accepted, decoding its Huffman codes (T.81 F.2.2, G.1.2) as stb 2.27 parses them, without the
+/// coefficients' values: "" if every restart interval holds all the bits its blocks take, else why
+/// not. stb reads zero bits past the data instead of failing, and when a code or a magnitude
+/// straddles the marker that ends the data its bit count goes negative (a shift by 32 or more in
+/// stbi__grow_buffer_unsafe, undefined behaviour; fixed in stb 2.28); refusing truncated intervals
+/// here keeps stb away from that state. For progressive files it keeps which coefficients are
+/// non-zero (8 bytes a block, 1/16 of stb's coefficients), since refinement scans read one bit per
+/// non-zero coefficient: AC scans must follow the component's first DC scan (before it stb reads
+/// memory it never wrote) and coefficients must fit stb's 16 bits. It also refuses DC predictions
+/// whose sum, or product with the quantiser (progressive: 2^Al), overflows stb's int (stb 2.28
+/// checks both too).
+[[nodiscard]] inline std::string check_jpeg_scans(const unsigned char* p, std::size_t n) {
+    JpegScanCheck check;
+    std::size_t pos = 2;
+    for (;;) {
+        while (pos < n && p[pos] != 0xff) ++pos;
+        while (pos < n && p[pos] == 0xff) ++pos;
+        if (pos >= n) return "";
+        const unsigned marker = p[pos++];
+        if (marker == 0xd9) return "";
+        if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd8)) continue;
+        const std::size_t length = big_endian16(p + pos); // within the data: check_jpeg's first pass
+        const unsigned char* s = p + pos + 2;
+        const std::size_t size = length - 2;
+        pos += length;
+        std::string why = marker == 0xda ? check.scan(p, n, pos, s) : check.segment(marker, s, size);
+        if (!why.empty()) return why;
     }
 }
 

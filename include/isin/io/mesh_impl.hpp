@@ -24,6 +24,7 @@
 #include "../triangle.hpp"
 #include "image_impl.hpp"
 #include "model_files.hpp"
+#include "mtl.hpp"
 #include "obj.hpp"
 #include "parse.hpp"
 #include "ply.hpp"
@@ -59,35 +60,6 @@ struct ObjVertexKeyHash {
         return static_cast<std::size_t>(h ^ (h >> 29));
     }
 };
-
-/// A colour from a .mtl file: non-finite or negative channels read as 0.
-template <class T>
-[[nodiscard]] inline Color<T> mtl_color(const tobj::real_t* c) noexcept {
-    const auto channel = [](tobj::real_t x) {
-        const auto v = static_cast<double>(x);
-        return std::isfinite(v) && v > 0 ? static_cast<T>(std::min(v, 1e6)) : T(0);
-    };
-    return {channel(c[0]), channel(c[1]), channel(c[2])};
-}
-
-/// isin's material for a .mtl material (see model.hpp for the mapping).
-template <class T>
-[[nodiscard]] inline Material<T> mtl_material(const tobj::material_t& t) {
-    Material<T> m;
-    m.color = mtl_color<T>(t.diffuse);
-    m.ambient_color = mtl_color<T>(t.ambient);
-    m.specular_color = mtl_color<T>(t.specular);
-    m.ka = m.kd = m.ks = T(1); // the colours carry the weights
-    const auto shininess = static_cast<double>(t.shininess);
-    m.shininess = std::isfinite(shininess) && shininess > 0 ? static_cast<T>(std::min(shininess, 1e4)) : T(0);
-    const auto dissolve = static_cast<double>(t.dissolve);
-    m.transparency = std::isfinite(dissolve) ? T(1) - static_cast<T>(std::clamp(dissolve, 0.0, 1.0)) : T(0);
-    const auto ior = static_cast<double>(t.ior);
-    m.ior = std::isfinite(ior) && ior > 0 && ior < 100 ? static_cast<T>(ior) : T(1);
-    if (t.illum >= 3 && t.illum <= 7) // ray-traced reflection (3–7 in the MTL specification)
-        m.reflectivity = std::min(T(1), (m.specular_color.r + m.specular_color.g + m.specular_color.b) / T(3));
-    return m;
-}
 
 /// Builds the meshes of an OBJ: one per part (group or object name with faces), vertices shared
 /// within a mesh when their v/vt/vn triples agree, polygons triangulated.

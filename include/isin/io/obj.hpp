@@ -1,8 +1,8 @@
 #pragma once
 /// isin — private: the OBJ reader behind load_obj, load_mesh and load_model. isin reads the
 /// statements in one pass, checking every number and reference (tinyobjloader's own parser reads
-/// "1,5" or "nan" as 0 without complaint and would parse the text a second time); tinyobjloader
-/// reads the .mtl files.
+/// "1,5" or "nan" as 0 without complaint and would parse the text a second time); the .mtl files
+/// are read as io/mtl.hpp says.
 #include <algorithm>
 #include <array>
 #include <cstddef>
@@ -23,6 +23,7 @@
 #include "parse.hpp"
 #include "file.hpp"
 #include "model_files.hpp"
+#include "mtl.hpp"
 #include "polygon.hpp"
 #include "tinyobj.hpp"
 
@@ -31,28 +32,8 @@ namespace isin {
 namespace detail {
 
 // =================================================================================================
-// OBJ: statements read by isin, .mtl files by tinyobjloader.
+// OBJ: statements read by isin, .mtl files by tinyobjloader (io/mtl.hpp).
 // =================================================================================================
-
-/// Calls f(line_number, begin, end) for each line as tinyobjloader splits them ('\n', "\r\n"
-/// or '\r' ends a line; a NUL byte ends its content); stops when f returns false.
-template <class F>
-inline void obj_for_each_line(std::string_view text, F&& f) {
-    const char* const data = text.data();
-    const std::size_t n = text.size();
-    std::size_t pos = 0, line = 0;
-    while (pos < n) {
-        std::size_t end = pos;
-        while (end < n && data[end] != '\n' && data[end] != '\r') ++end;
-        ++line;
-        const char* b = data + pos;
-        const char* e = data + end;
-        if (const void* nul = std::memchr(b, 0, end - pos)) e = static_cast<const char*>(nul);
-        if (!f(line, b, e)) return;
-        pos = end;
-        if (pos < n) pos += (data[pos] == '\r' && pos + 1 < n && data[pos + 1] == '\n') ? 2 : 1;
-    }
-}
 
 /// 'v' for a vertex statement, 'f' for a face, 'n' for a normal (vn), 't' for a texture
 /// coordinate (vt), 0 otherwise (tinyobjloader's classification); `b` is left after the keyword.
@@ -68,35 +49,6 @@ inline void obj_for_each_line(std::string_view text, F&& f) {
     const char kind = (*b == 'v' || *b == 'f') ? *b : 0;
     if (kind) b += 2;
     return kind;
-}
-
-/// Why tinyobjloader's number parser must not see the token [b, e), or "". It accumulates the
-/// exponent in an int whose overflow guard is off by one (ten or more significant exponent
-/// digits are undefined behaviour) and counts digits in an int; isin refuses such tokens first.
-[[nodiscard]] inline std::string obj_unsafe_number(const char* b, const char* e) {
-    constexpr std::ptrdiff_t longest = 4096;
-    if (e - b > longest)
-        return "number " + mesh_quote(b, e) + " is longer than " + std::to_string(longest) + " characters";
-    for (const char* p = b; p != e; ++p) {
-        if (*p != 'e' && *p != 'E') continue;
-        const char* d = p + 1;
-        if (d != e && (*d == '+' || *d == '-')) ++d;
-        while (d != e && *d == '0') ++d;
-        int digits = 0;
-        for (; d != e && *d >= '0' && *d <= '9'; ++d) ++digits;
-        if (digits > 9) return "exponent of " + mesh_quote(b, e) + " is out of range";
-    }
-    return "";
-}
-
-/// Next token separated by spaces or tabs; false at the end of the line.
-[[nodiscard]] inline bool obj_token(const char*& p, const char* e, const char*& tb, const char*& te) noexcept {
-    while (p != e && (*p == ' ' || *p == '\t')) ++p;
-    if (p == e) return false;
-    tb = p;
-    while (p != e && *p != ' ' && *p != '\t') ++p;
-    te = p;
-    return true;
 }
 
 /// Reads one face vertex reference v, v/vt, v//vn or v/vt/vn into `index` (v, vt, vn as written:
@@ -149,15 +101,6 @@ inline void obj_for_each_line(std::string_view text, F&& f) {
 }
 
 #if ISIN_HAVE_TINYOBJLOADER
-
-/// Hands a string to tinyobjloader as a stream, without copying it.
-class ObjTextBuf : public std::streambuf {
-public:
-    explicit ObjTextBuf(std::string_view text) { // read only: the get area is never written
-        char* b = const_cast<char*>(text.data());
-        setg(b, b, b + text.size());
-    }
-};
 
 // Internal linkage, as tinyobjloader's types in them (see tinyobj.hpp).
 namespace {
@@ -285,92 +228,6 @@ struct ObjCollector {
     }
 };
 
-/// Reads .mtl files for tinyobjloader through ModelFiles (each file once, confined, within the
-/// limits and the model's budget) with isin's number checks; a file that cannot be read or is
-/// over the budget is a warning, a malformed one an error.
-template <class T>
-class ObjMaterialReader {
-public:
-    ObjMaterialReader(std::string dir, ModelFiles& files, ObjCollector<T>& collector)
-        : dir_(std::move(dir)), files_(files), c_(collector) {}
-
-    std::string error; // the first malformed .mtl, as a message naming it
-
-    /// Reads the .mtl file `name` (relative to the OBJ's directory) unless it was read before;
-    /// true if it is read, now or before.
-    bool read(const std::string& name) {
-        const ModelFiles::Found found = files_.find(dir_, name, ModelFileKind::material, false);
-        if (found.id == ModelFiles::none) {
-            c_.warnings.push_back("material file '" + (dir_ + name).substr(0, 200) + "': " + found.why);
-            return false;
-        }
-        int& read_before = files_.memo(found.id);
-        if (read_before >= 0) return read_before == 1;
-        read_before = 0;
-        const std::string& path = files_.path(found.id);
-        const std::uint64_t left = files_.budget.mtl_bytes - std::min(files_.budget.mtl_bytes, files_.mtl_bytes);
-        std::error_code ec;
-        const std::uintmax_t size = std::filesystem::file_size(path, ec);
-        if (!ec && size > left) {
-            c_.warnings.push_back("material file '" + path + "': " + std::to_string(size) + " bytes, more than the " +
-                                  std::to_string(left) + " left of ModelBudget::mtl_bytes; left out");
-            return false;
-        }
-        std::string text;
-        const std::string why = files_.read(found.id, text, left);
-        if (!why.empty()) {
-            c_.warnings.push_back("material file '" + path + "': " + why);
-            return false;
-        }
-        files_.mtl_bytes += text.size();
-        // tinyobjloader's number parser must not see what isin refuses in OBJ text (see
-        // obj_unsafe_number); other malformed numbers it reads as 0, as assimp does.
-        std::string unsafe;
-        std::uint64_t newmtl = 0; // materials the file defines, for the budget
-        obj_for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
-            const char *tb = nullptr, *te = nullptr;
-            for (bool first = true; obj_token(b, e, tb, te); first = false) {
-                if (first && te - tb == 6 && std::memcmp(tb, "newmtl", 6) == 0) ++newmtl;
-                const std::string bad = obj_unsafe_number(tb, te);
-                if (!bad.empty()) {
-                    unsafe = "line " + std::to_string(line) + ": " + bad;
-                    return false;
-                }
-            }
-            return true;
-        });
-        if (!unsafe.empty()) {
-            if (error.empty()) error = "'" + path + "': " + unsafe;
-            return false;
-        }
-        const std::uint64_t max_materials = files_.budget.materials;
-        if (newmtl > max_materials - std::min<std::uint64_t>(max_materials, c_.materials.size())) {
-            c_.warnings.push_back(
-                "material file '" + path + "': " + std::to_string(newmtl) + " materials, more than the " +
-                std::to_string(max_materials - std::min<std::uint64_t>(max_materials, c_.materials.size())) +
-                " left of ModelBudget::materials; left out");
-            return false;
-        }
-        ObjTextBuf buf(text);
-        std::istream in(&buf);
-        std::string warn, err;
-        std::map<std::string, int> names; // tinyobjloader's map of this file's names (first of a name kept)
-        const std::size_t before = c_.materials.size();
-        tobj::LoadMtl(&names, &c_.materials, &in, &warn, &err);
-        for (std::size_t i = before; i < c_.materials.size(); ++i)
-            c_.material_ids.emplace(c_.materials[i].name, static_cast<int>(i));
-        const std::size_t slash = path.find_last_of('/');
-        c_.material_dirs.resize(c_.materials.size(), slash == std::string::npos ? "" : path.substr(0, slash + 1));
-        read_before = 1;
-        return true;
-    }
-
-private:
-    std::string dir_;
-    ModelFiles& files_;
-    ObjCollector<T>& c_;
-};
-
 } // namespace
 
 /// The rest of a line after `keyword` and one space or tab, or nullptr if the line is not that
@@ -401,8 +258,8 @@ inline void obj_collect(const char* who, const std::string& name, std::string_vi
     }
     if (text.size() >= 3 && text.substr(0, 3) == "\xef\xbb\xbf") text.remove_prefix(3); // UTF-8 byte order mark
     c.attributes = attributes;
-    std::unique_ptr<ObjMaterialReader<T>> mtl;
-    if (files) mtl = std::make_unique<ObjMaterialReader<T>>(dir, *files, c);
+    std::unique_ptr<ObjMaterialReader<ObjCollector<T>>> mtl;
+    if (files) mtl = std::make_unique<ObjMaterialReader<ObjCollector<T>>>(dir, *files, c);
     std::vector<std::array<int, 3>> refs; // a face's references
     obj_for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
         const auto fail = [&](const std::string& why) {

@@ -1,6 +1,6 @@
 #pragma once
 /// isin — private: what the mesh readers share (errors, the whole-file read, number parsing and
-/// checking), for io/obj.hpp and io/ply.hpp.
+/// checking, the line grammar of OBJ and MTL), for io/obj.hpp, io/mtl.hpp and io/ply.hpp.
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -203,6 +203,66 @@ enum class NumberStatus { ok, malformed, out_of_range };
     if (status == NumberStatus::out_of_range) return std::string(what) + " " + mesh_quote(b, e) + " is out of range";
     return std::string("malformed number ") + mesh_quote(b, e);
 }
+
+// The line grammar of OBJ and MTL text (tinyobjloader's), for io/obj.hpp and io/mtl.hpp.
+
+/// Calls f(line_number, begin, end) for each line as tinyobjloader splits them ('\n', "\r\n"
+/// or '\r' ends a line; a NUL byte ends its content); stops when f returns false.
+template <class F>
+inline void obj_for_each_line(std::string_view text, F&& f) {
+    const char* const data = text.data();
+    const std::size_t n = text.size();
+    std::size_t pos = 0, line = 0;
+    while (pos < n) {
+        std::size_t end = pos;
+        while (end < n && data[end] != '\n' && data[end] != '\r') ++end;
+        ++line;
+        const char* b = data + pos;
+        const char* e = data + end;
+        if (const void* nul = std::memchr(b, 0, end - pos)) e = static_cast<const char*>(nul);
+        if (!f(line, b, e)) return;
+        pos = end;
+        if (pos < n) pos += (data[pos] == '\r' && pos + 1 < n && data[pos + 1] == '\n') ? 2 : 1;
+    }
+}
+
+/// Why tinyobjloader's number parser must not see the token [b, e), or "". It accumulates the
+/// exponent in an int whose overflow guard is off by one (ten or more significant exponent
+/// digits are undefined behaviour) and counts digits in an int; isin refuses such tokens first.
+[[nodiscard]] inline std::string obj_unsafe_number(const char* b, const char* e) {
+    constexpr std::ptrdiff_t longest = 4096;
+    if (e - b > longest)
+        return "number " + mesh_quote(b, e) + " is longer than " + std::to_string(longest) + " characters";
+    for (const char* p = b; p != e; ++p) {
+        if (*p != 'e' && *p != 'E') continue;
+        const char* d = p + 1;
+        if (d != e && (*d == '+' || *d == '-')) ++d;
+        while (d != e && *d == '0') ++d;
+        int digits = 0;
+        for (; d != e && *d >= '0' && *d <= '9'; ++d) ++digits;
+        if (digits > 9) return "exponent of " + mesh_quote(b, e) + " is out of range";
+    }
+    return "";
+}
+
+/// Next token separated by spaces or tabs; false at the end of the line.
+[[nodiscard]] inline bool obj_token(const char*& p, const char* e, const char*& tb, const char*& te) noexcept {
+    while (p != e && (*p == ' ' || *p == '\t')) ++p;
+    if (p == e) return false;
+    tb = p;
+    while (p != e && *p != ' ' && *p != '\t') ++p;
+    te = p;
+    return true;
+}
+
+/// Hands a string to tinyobjloader as a stream, without copying it.
+class ObjTextBuf : public std::streambuf {
+public:
+    explicit ObjTextBuf(std::string_view text) { // read only: the get area is never written
+        char* b = const_cast<char*>(text.data());
+        setg(b, b, b + text.size());
+    }
+};
 
 } // namespace detail
 

@@ -20,38 +20,17 @@ constexpr int stream_depth = 4;
 // their shadow rays, and their reflected and transmitted rays.
 constexpr int stream_rays = 64;
 
-// Up to stream_rays rays at `depth` (a block of primary rays at depth 0, which `skip` culls),
-// each one's colour into out[] exactly as trace() computes it: the rays through the scene's
-// stream intersect (packets), the shadow rays of all lights through the stream occluded when
-// nothing in the scene is transparent (then transmittance is 0 or 1), else through the stream
-// transmittance, and each point's lights added in the lights' order; the reflected and the
-// transmitted rays as streams of their own.
+// §7, §9: the point lights' terms into the lanes of a stream's `count` shaded points (padded to
+// `padded`), their shadow rays traced as streams.
 template <class T, template <class> class... S>
-void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int depth, bool opaque,
-                  const RenderOptions& opt, RenderStats& stats, const typename Scene<T, S...>::Culled* skip,
-                  Color<T>* out) {
+ISIN_DETAIL_INLINE void point_lights_stream(const Scene<T, S...>& scene, T* lanes, int count, std::size_t padded,
+                                            bool opaque, const RenderOptions& opt, RenderStats& stats) {
     constexpr int N = stream_rays;
-    Hit<T> hits[N];
-    scene.intersect(rays, std::size_t(n), hits, skip);
-    // Each hit's surface into its lane, then the passes a register of lanes at a time.
     using Lanes = ShadingLanes<T>;
     constexpr std::size_t W = Lanes::width, stride = N;
-    alignas(64) T lanes[Lanes::rows * stride];
-    const Material<T>* material[N];
-    int shaded[N] = {}, count = 0; // (zeroed: g++ warns of a pointer to an array not yet written)
-    for (int k = 0; k < n; ++k) {
-        if (hits[k])
-            shaded[count++] = k;
-        else
-            out[k] = scene.background;
-    }
-    hits_into_lanes(scene, rays, hits, shaded, std::size_t(count), lanes, stride, material);
-    const std::size_t padded = (std::size_t(count) + W - 1) / W * W;
-    for (std::size_t k = std::size_t(count); k < padded; ++k) Lanes::clear(lanes, stride, k);
-    for (std::size_t k = 0; k < padded; k += W) surface_pass(lanes + k, stride), side_pass(lanes + k, stride);
+    const T* from[3] = {lanes + Lanes::hx * stride, lanes + Lanes::hy * stride, lanes + Lanes::hz * stride};
     // §7, §9: the lights' terms, up to `slots` lights at a time, as many as fit their shadow rays
     // in one stream.
-    const T* from[3] = {lanes + Lanes::hx * stride, lanes + Lanes::hy * stride, lanes + Lanes::hz * stride};
     const std::size_t lights = scene.lights.size();
     for (std::size_t first = 0; first < lights;) {
         Ray<T> shadow[N];
@@ -92,6 +71,16 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
                 light_term_pass(lanes + k, stride, light - first, scene.lights[light].color);
         first = last;
     }
+}
+
+// §9: the area lights' terms into the lanes of a stream's `count` shaded points.
+template <class T, template <class> class... S>
+ISIN_DETAIL_INLINE void rect_lights_stream(const Scene<T, S...>& scene, T* lanes, int count, bool opaque,
+                                           const RenderOptions& opt, RenderStats& stats) {
+    constexpr int N = stream_rays;
+    using Lanes = ShadingLanes<T>;
+    constexpr std::size_t stride = N;
+    const T* from[3] = {lanes + Lanes::hx * stride, lanes + Lanes::hy * stride, lanes + Lanes::hz * stride};
     if (!scene.rect_lights.empty()) {
         // §9: with adaptive sampling, the shadow rays to each area light's corners first, as a
         // stream per corner (coherent as a point light's), up to a few lights at a time.
@@ -129,6 +118,39 @@ void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int de
                                        std::size_t(count), first, last);
         }
     }
+}
+
+// Up to stream_rays rays at `depth` (a block of primary rays at depth 0, which `skip` culls),
+// each one's colour into out[] exactly as trace() computes it: the rays through the scene's
+// stream intersect (packets), the shadow rays of all lights through the stream occluded when
+// nothing in the scene is transparent (then transmittance is 0 or 1), else through the stream
+// transmittance, and each point's lights added in the lights' order; the reflected and the
+// transmitted rays as streams of their own.
+template <class T, template <class> class... S>
+void trace_stream(const Scene<T, S...>& scene, const Ray<T>* rays, int n, int depth, bool opaque,
+                  const RenderOptions& opt, RenderStats& stats, const typename Scene<T, S...>::Culled* skip,
+                  Color<T>* out) {
+    constexpr int N = stream_rays;
+    Hit<T> hits[N];
+    scene.intersect(rays, std::size_t(n), hits, skip);
+    // Each hit's surface into its lane, then the passes a register of lanes at a time.
+    using Lanes = ShadingLanes<T>;
+    constexpr std::size_t W = Lanes::width, stride = N;
+    alignas(64) T lanes[Lanes::rows * stride];
+    const Material<T>* material[N];
+    int shaded[N] = {}, count = 0; // (zeroed: g++ warns of a pointer to an array not yet written)
+    for (int k = 0; k < n; ++k) {
+        if (hits[k])
+            shaded[count++] = k;
+        else
+            out[k] = scene.background;
+    }
+    hits_into_lanes(scene, rays, hits, shaded, std::size_t(count), lanes, stride, material);
+    const std::size_t padded = (std::size_t(count) + W - 1) / W * W;
+    for (std::size_t k = std::size_t(count); k < padded; ++k) Lanes::clear(lanes, stride, k);
+    for (std::size_t k = 0; k < padded; k += W) surface_pass(lanes + k, stride), side_pass(lanes + k, stride);
+    point_lights_stream(scene, lanes, count, padded, opaque, opt, stats);
+    rect_lights_stream(scene, lanes, count, opaque, opt, stats);
     // §8: the reflected and the transmitted rays of every point that has them, as two streams.
     Ray<T> next[2][N];
     int counts[2] = {0, 0}, slot[2][N];
