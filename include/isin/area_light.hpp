@@ -156,6 +156,26 @@ struct LightSampling {
 }
 
 namespace detail {
+/// c^e for e ≥ 1 by squaring (e's bits from the lowest): ⌊log2 e⌋ squarings and a multiply per
+/// further set bit; a relative error of about e·ε (each squaring doubles the one before).
+template <class V>
+[[nodiscard]] V lane_power(V c, std::uint32_t e) noexcept {
+    for (; (e & 1u) == 0u; e >>= 1) c = c * c;
+    V result = c;
+    for (e >>= 1; e; e >>= 1) {
+        c = c * c;
+        if (e & 1u) result = result * c;
+    }
+    return result;
+}
+
+/// The shininess as an exponent for lane_power where it is a whole number from 1 to 4,096, else 0.
+template <class T>
+[[nodiscard]] inline std::uint32_t integral_power(T shininess) noexcept {
+    return shininess >= T(1) && shininess <= T(4096) && shininess == std::floor(shininess) ? std::uint32_t(shininess)
+                                                                                           : 0u;
+}
+
 /// The sum of a register's lanes, lane 0 first.
 template <class T, class V>
 [[nodiscard]] T lane_total(const V& lanes) noexcept {
@@ -206,7 +226,9 @@ template <class T, class SceneT>
     const detail::PatternSeeds seeds = detail::pattern_seeds(seed);
     // A highlight term below 2^-24 of ks is left out: cos^shininess < 2^-24 where cos < 2^(-24/shininess).
     const T min_cos = p.shininess > T(0) ? std::exp2(T(-24) / p.shininess) : T(2);
-    constexpr int chunk = 64; // samples per stream of shadow rays, a multiple of every register width
+    const std::uint32_t power = detail::integral_power(p.shininess); // 0: std::pow, one sample at a time
+    const bool highlight = p.ks != T(0); // without, the highlight sum is not needed (0·sum adds nothing)
+    constexpr int chunk = 64;            // samples per stream of shadow rays, a multiple of every register width
     static_assert(chunk % W == 0, "whole registers");
     alignas(64) T u[chunk], v[chunk], qx[chunk], qy[chunk], qz[chunk], n_dot_l[chunk], cosine[chunk], spec[chunk],
         through[chunk], one[chunk], seen[chunk];
@@ -241,26 +263,49 @@ template <class T, class SceneT>
         }
         for (int k = m; k < padded; ++k) n_dot_l[k] = T(0); // past the last sample
     };
+    // The probe samples: those in even columns and rows of the strata (a quarter, over the whole rectangle).
+    const auto is_probe = [&](int k) { return ((column[k] | (nv > 1 ? row[k] : 0u)) & 1u) == 0u; };
+    // What the probes' shadow rays found, for samples [0, probed) (a penumbra's pass reuses them).
+    constexpr int kept = 256;
+    T probe_seen[kept];
+    int probed = 0;
     // Adds every sample's term, with its shadow ray or, where `assumed` ≥ 0, that visibility.
     const auto shade = [&](T assumed) {
         std::uint32_t i = 0, j = 0;
         for (int k0 = 0; k0 < n; k0 += chunk) {
             const int m = std::min(chunk, n - k0), padded = (m + W - 1) / W * W;
             place(k0, m, padded, i, j);
-            for (int k = 0; k < padded; ++k) // §7: cos^shininess, where it can count
-                spec[k] = n_dot_l[k] > T(0) && cosine[k] > min_cos ? specular_power(cosine[k], p.shininess) : T(0);
             if (assumed >= T(0) || !s.shadows) {
                 const T visible = s.shadows ? assumed : T(1);
                 for (int k = 0; k < padded; ++k) through[k] = visible;
-            } else { // §9: a ray towards each lit sample; anything nearer than it shadows
+            } else { // §9: a ray towards each lit sample (but probes already traced); anything nearer than it shadows
                 int r = 0;
                 for (int k = 0; k < padded; ++k) {
                     through[k] = T(0);
-                    if (n_dot_l[k] > T(0)) ray_of[r] = k, rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
+                    if (!(n_dot_l[k] > T(0))) continue;
+                    if (k0 + k < probed && is_probe(k))
+                        through[k] = probe_seen[k0 + k];
+                    else
+                        ray_of[r] = k, rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
                 }
                 shadow_rays += std::uint64_t(r);
                 detail::shadow_visibility(scene, rays, std::size_t(r), s.opaque, one, seen);
                 for (int t = 0; t < r; ++t) through[ray_of[t]] = seen[t];
+            }
+            if (!highlight) {
+                for (int k = 0; k < padded; ++k) spec[k] = T(0);
+            } else if (power > 0u) { // §7: cos^shininess by squaring, a register at a time
+                for (int b = 0; b < padded; b += W) {
+                    const V c = load(cosine + b);
+                    const auto counts = (load(n_dot_l + b) > T(0)) & (c > min_cos);
+                    detail::store_lanes(select(counts, detail::lane_power(select(counts, c, V(T(1))), power), V(T(0))),
+                                        spec + b);
+                }
+            } else {
+                for (int k = 0; k < padded; ++k) // §7: cos^shininess, where it can count
+                    spec[k] = through[k] > T(0) && n_dot_l[k] > T(0) && cosine[k] > min_cos
+                                  ? specular_power(cosine[k], p.shininess)
+                                  : T(0);
             }
             for (int b = 0; b < padded; b += W) {
                 const V visible = load(through + b);
@@ -271,8 +316,7 @@ template <class T, class SceneT>
     };
     // Below this many samples the probes cost more than the rays they save (one small stream a point).
     constexpr int probe_from = 64;
-    // §9: whether the shadow rays to the probe samples (those in even columns and rows of the
-    // strata: a quarter of them, spread over the whole rectangle) all find `expected`.
+    // §9: whether the shadow rays to the probe samples all find `expected`.
     const auto probe_agrees = [&](T expected) {
         std::uint32_t i = 0, j = 0;
         for (int k0 = 0; k0 < n; k0 += chunk) {
@@ -280,11 +324,13 @@ template <class T, class SceneT>
             place(k0, m, padded, i, j);
             int r = 0;
             for (int k = 0; k < m; ++k)
-                if (((column[k] | (nv > 1 ? row[k] : 0u)) & 1u) == 0u && n_dot_l[k] > T(0))
-                    rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
+                if (is_probe(k) && n_dot_l[k] > T(0))
+                    ray_of[r] = k, rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
             if (r == 0) continue;
             shadow_rays += std::uint64_t(r);
             detail::shadow_visibility(scene, rays, std::size_t(r), s.opaque, one, seen);
+            for (int t = 0; t < r && k0 + ray_of[t] < kept; ++t) probe_seen[k0 + ray_of[t]] = seen[t];
+            probed = std::min(kept, k0 + m);
             for (int t = 0; t < r; ++t)
                 if (seen[t] != expected) return false;
         }
