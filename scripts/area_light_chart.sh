@@ -4,7 +4,8 @@
 # against render time for light_samples 1 … 256, uniform and adaptive, pixel samples 1×1 … 4×4,
 # against a reference of 4,096 light samples and 8×8 pixel samples at 80 × 45 (rendered once on
 # both cores and kept in build/chart/reference_*.ppm; delete them after changing the renderer).
-# Writes docs/area_lights.csv and docs/area_lights_chart.png (python3-matplotlib).
+# Writes docs/area_lights.csv and docs/area_lights_chart.png (python3-matplotlib), and prints
+# adaptive against uniform at equal error (scripts/area_light_equal_error.py). Times are CPU times.
 # Needs: cmake --preset bench && cmake --build build/bench --target area_lights
 # Usage: bash scripts/area_light_chart.sh [width=80] [height=45] [repeats=3]
 set -euo pipefail
@@ -29,3 +30,4 @@ done
 py=python3
 "$py" -c "import matplotlib" 2> /dev/null || py=/usr/bin/python3 # Debian's python3-matplotlib
 "$py" scripts/area_light_chart.py docs/area_lights.csv docs/area_lights_chart.png
+"$py" scripts/area_light_equal_error.py docs/area_lights.csv

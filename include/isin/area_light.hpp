@@ -156,6 +156,26 @@ struct LightSampling {
 }
 
 namespace detail {
+/// c^e for e ≥ 1 by squaring (e's bits from the lowest): ⌊log2 e⌋ squarings and a multiply per
+/// further set bit; a relative error of about e·ε (each squaring doubles the one before).
+template <class V>
+[[nodiscard]] V lane_power(V c, std::uint32_t e) noexcept {
+    for (; (e & 1u) == 0u; e >>= 1) c = c * c;
+    V result = c;
+    for (e >>= 1; e; e >>= 1) {
+        c = c * c;
+        if (e & 1u) result = result * c;
+    }
+    return result;
+}
+
+/// The shininess as an exponent for lane_power where it is a whole number from 1 to 4,096, else 0.
+template <class T>
+[[nodiscard]] inline std::uint32_t integral_power(T shininess) noexcept {
+    return shininess >= T(1) && shininess <= T(4096) && shininess == std::floor(shininess) ? std::uint32_t(shininess)
+                                                                                           : 0u;
+}
+
 /// The sum of a register's lanes, lane 0 first.
 template <class T, class V>
 [[nodiscard]] T lane_total(const V& lanes) noexcept {
@@ -179,6 +199,75 @@ void shadow_visibility(const SceneT& scene, const Ray<T>* rays, std::size_t coun
         for (std::size_t t = 0; t < m; ++t) visible[first + t] = blocked[t] ? T(0) : T(1);
     }
 }
+
+/// A chunk of an area light's samples at one shading point, shaded a register at a time: their
+/// strata, points q, N·L (0 where unlit or past the last sample), Rf·V, highlight terms and
+/// visibility (filled by the caller).
+template <class T>
+struct LightSampleChunk {
+    static constexpr int size = 64; // samples per stream of shadow rays, a multiple of every register width
+    static_assert(size % int(LaneRegister<T>::width) == 0, "whole registers");
+    alignas(64) T u[size], v[size], qx[size], qy[size], qz[size], n_dot_l[size], cosine[size], spec[size],
+        through[size];
+    std::uint32_t column[size], row[size];
+
+    /// Places samples k0 … k0 + padded − 1 (their strata counted on from (i, j), no remainders):
+    /// their points q, N·L and Rf·V.
+    ISIN_DETAIL_INLINE void place(const RectLight<T>& light, const LitPoint<T>& p, const PatternSeeds& seeds,
+                                  std::uint32_t nu, std::uint32_t nv, T inv_n, int k0, int m, int padded,
+                                  std::uint32_t& i, std::uint32_t& j) noexcept {
+        using V = typename LaneRegister<T>::V;
+        using detail::lane_fma, detail::select;
+        constexpr int W = int(LaneRegister<T>::width);
+        const auto load = [](const T* a) { return load_lanes<T, V>(a); };
+        for (int k = 0; k < padded; ++k) {
+            column[k] = i, row[k] = j;
+            if (++i == nu) i = 0, ++j;
+        }
+        for (int k = 0; k < padded; ++k)
+            sample_uv(seeds, nu, nv, column[k], row[k], std::uint32_t(k0 + k), inv_n, u[k], v[k]);
+        for (int b = 0; b < padded; b += W) { // §7 a register of samples at a time, as light_sample places them
+            const V su = load(u + b), sv = load(v + b);
+            const V x = lane_fma(sv, V(light.edge_v.x), lane_fma(su, V(light.edge_u.x), V(light.corner.x)));
+            const V y = lane_fma(sv, V(light.edge_v.y), lane_fma(su, V(light.edge_u.y), V(light.corner.y)));
+            const V z = lane_fma(sv, V(light.edge_v.z), lane_fma(su, V(light.edge_u.z), V(light.corner.z)));
+            store_lanes(x, qx + b), store_lanes(y, qy + b), store_lanes(z, qz + b);
+            V lx = x - V(p.point.x), ly = y - V(p.point.y), lz = z - V(p.point.z);
+            (void)lane_normalize<T>(lx, ly, lz);                            // §2: L = (q − P)/|q − P|, or 0
+            const V c = lane_dot(V(p.N.x), V(p.N.y), V(p.N.z), lx, ly, lz); // §7: N·L
+            // §7: Rf = d − 2(d·N)N with d = −L, and its cosine with V
+            const auto [rx, ry, rz] = lane_reflect<T>(-lx, -ly, -lz, V(p.N.x), V(p.N.y), V(p.N.z));
+            store_lanes(lane_dot(rx, ry, rz, V(p.V.x), V(p.V.y), V(p.V.z)), cosine + b);
+            store_lanes(select(c > T(0), c, V(T(0))), n_dot_l + b); // §7: facing away → unlit
+        }
+        for (int k = m; k < padded; ++k) n_dot_l[k] = T(0); // past the last sample
+    }
+
+    /// spec: each sample's cos^shininess where it can count (lit, and above min_cos), else 0;
+    /// by squaring a register at a time where `power` (the whole shininess) is not 0.
+    ISIN_DETAIL_INLINE void highlights(const LitPoint<T>& p, bool highlight, std::uint32_t power, T min_cos,
+                                       int padded) noexcept {
+        using V = typename LaneRegister<T>::V;
+        using detail::select;
+        constexpr int W = int(LaneRegister<T>::width);
+        const auto load = [](const T* a) { return load_lanes<T, V>(a); };
+        if (!highlight) {
+            for (int k = 0; k < padded; ++k) spec[k] = T(0);
+        } else if (power > 0u) { // §7: cos^shininess by squaring, a register at a time
+            for (int b = 0; b < padded; b += W) {
+                const V c = load(cosine + b);
+                const auto counts = (load(n_dot_l + b) > T(0)) & (c > min_cos);
+                store_lanes(select(counts, lane_power(select(counts, c, V(T(1))), power), V(T(0))), spec + b);
+            }
+        } else {
+            for (int k = 0; k < padded; ++k) // §7: cos^shininess, where it can count
+                spec[k] = through[k] > T(0) && n_dot_l[k] > T(0) && cosine[k] > min_cos
+                              ? specular_power(cosine[k], p.shininess)
+                              : T(0);
+        }
+    }
+};
+
 } // namespace detail
 
 /// The mean over the rectangle of `light` of a PointLight's Phong term (§7) at p, shadows
@@ -206,73 +295,59 @@ template <class T, class SceneT>
     const detail::PatternSeeds seeds = detail::pattern_seeds(seed);
     // A highlight term below 2^-24 of ks is left out: cos^shininess < 2^-24 where cos < 2^(-24/shininess).
     const T min_cos = p.shininess > T(0) ? std::exp2(T(-24) / p.shininess) : T(2);
-    constexpr int chunk = 64; // samples per stream of shadow rays, a multiple of every register width
-    static_assert(chunk % W == 0, "whole registers");
-    alignas(64) T u[chunk], v[chunk], qx[chunk], qy[chunk], qz[chunk], n_dot_l[chunk], cosine[chunk], spec[chunk],
-        through[chunk], one[chunk], seen[chunk];
-    std::uint32_t column[chunk], row[chunk];
+    const std::uint32_t power = detail::integral_power(p.shininess); // 0: std::pow, one sample at a time
+    const bool highlight = p.ks != T(0); // without, the highlight sum is not needed (0·sum adds nothing)
+    constexpr int chunk = detail::LightSampleChunk<T>::size;
+    detail::LightSampleChunk<T> batch;
+    alignas(64) T one[chunk], seen[chunk];
     Ray<T> rays[chunk];
     int ray_of[chunk]; // each shadow ray's sample
     for (T& t : one) t = T(1);
     V diffuse_sum = V(T(0)), specular_sum = V(T(0));
     const auto load = [](const T* a) { return detail::load_lanes<T, V>(a); };
-    // Places samples k0 … k0 + padded − 1 (their strata counted on from (i, j), no remainders):
-    // their points q, N·L (0 where unlit or past the last sample) and Rf·V.
     const auto place = [&](int k0, int m, int padded, std::uint32_t& i, std::uint32_t& j) {
-        for (int k = 0; k < padded; ++k) {
-            column[k] = i, row[k] = j;
-            if (++i == nu) i = 0, ++j;
-        }
-        for (int k = 0; k < padded; ++k)
-            detail::sample_uv(seeds, nu, nv, column[k], row[k], std::uint32_t(k0 + k), inv_n, u[k], v[k]);
-        for (int b = 0; b < padded; b += W) { // §7 a register of samples at a time, as light_sample places them
-            const V su = load(u + b), sv = load(v + b);
-            const V x = lane_fma(sv, V(light.edge_v.x), lane_fma(su, V(light.edge_u.x), V(light.corner.x)));
-            const V y = lane_fma(sv, V(light.edge_v.y), lane_fma(su, V(light.edge_u.y), V(light.corner.y)));
-            const V z = lane_fma(sv, V(light.edge_v.z), lane_fma(su, V(light.edge_u.z), V(light.corner.z)));
-            detail::store_lanes(x, qx + b), detail::store_lanes(y, qy + b), detail::store_lanes(z, qz + b);
-            V lx = x - V(p.point.x), ly = y - V(p.point.y), lz = z - V(p.point.z);
-            (void)detail::lane_normalize<T>(lx, ly, lz); // §2: L = (q − P)/|q − P|, or 0
-            const V c = detail::lane_dot(V(p.N.x), V(p.N.y), V(p.N.z), lx, ly, lz); // §7: N·L
-            // §7: Rf = d − 2(d·N)N with d = −L, and its cosine with V
-            const auto [rx, ry, rz] = detail::lane_reflect<T>(-lx, -ly, -lz, V(p.N.x), V(p.N.y), V(p.N.z));
-            detail::store_lanes(detail::lane_dot(rx, ry, rz, V(p.V.x), V(p.V.y), V(p.V.z)), cosine + b);
-            detail::store_lanes(select(c > T(0), c, V(T(0))), n_dot_l + b); // §7: facing away → unlit
-        }
-        for (int k = m; k < padded; ++k) n_dot_l[k] = T(0); // past the last sample
+        batch.place(light, p, seeds, nu, nv, inv_n, k0, m, padded, i, j);
     };
+    // The probe samples: those in even columns and rows of the strata (a quarter, over the whole rectangle).
+    const auto is_probe = [&](int k) { return ((batch.column[k] | (nv > 1 ? batch.row[k] : 0u)) & 1u) == 0u; };
+    // What the probes' shadow rays found, for samples [0, probed) (a penumbra's pass reuses them).
+    constexpr int kept = 256;
+    T probe_seen[kept];
+    int probed = 0;
     // Adds every sample's term, with its shadow ray or, where `assumed` ≥ 0, that visibility.
     const auto shade = [&](T assumed) {
         std::uint32_t i = 0, j = 0;
         for (int k0 = 0; k0 < n; k0 += chunk) {
             const int m = std::min(chunk, n - k0), padded = (m + W - 1) / W * W;
             place(k0, m, padded, i, j);
-            for (int k = 0; k < padded; ++k) // §7: cos^shininess, where it can count
-                spec[k] = n_dot_l[k] > T(0) && cosine[k] > min_cos ? specular_power(cosine[k], p.shininess) : T(0);
             if (assumed >= T(0) || !s.shadows) {
                 const T visible = s.shadows ? assumed : T(1);
-                for (int k = 0; k < padded; ++k) through[k] = visible;
-            } else { // §9: a ray towards each lit sample; anything nearer than it shadows
+                for (int k = 0; k < padded; ++k) batch.through[k] = visible;
+            } else { // §9: a ray towards each lit sample (but probes already traced); anything nearer than it shadows
                 int r = 0;
                 for (int k = 0; k < padded; ++k) {
-                    through[k] = T(0);
-                    if (n_dot_l[k] > T(0)) ray_of[r] = k, rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
+                    batch.through[k] = T(0);
+                    if (!(batch.n_dot_l[k] > T(0))) continue;
+                    if (k0 + k < probed && is_probe(k))
+                        batch.through[k] = probe_seen[k0 + k];
+                    else
+                        ray_of[r] = k, rays[r++] = {p.from, Vertex<T>{batch.qx[k], batch.qy[k], batch.qz[k]} - p.from};
                 }
                 shadow_rays += std::uint64_t(r);
                 detail::shadow_visibility(scene, rays, std::size_t(r), s.opaque, one, seen);
-                for (int t = 0; t < r; ++t) through[ray_of[t]] = seen[t];
+                for (int t = 0; t < r; ++t) batch.through[ray_of[t]] = seen[t];
             }
+            batch.highlights(p, highlight, power, min_cos, padded);
             for (int b = 0; b < padded; b += W) {
-                const V visible = load(through + b);
-                diffuse_sum = lane_fma(visible, load(n_dot_l + b), diffuse_sum);
-                specular_sum = lane_fma(visible, load(spec + b), specular_sum);
+                const V visible = load(batch.through + b);
+                diffuse_sum = lane_fma(visible, load(batch.n_dot_l + b), diffuse_sum);
+                specular_sum = lane_fma(visible, load(batch.spec + b), specular_sum);
             }
         }
     };
     // Below this many samples the probes cost more than the rays they save (one small stream a point).
     constexpr int probe_from = 64;
-    // §9: whether the shadow rays to the probe samples (those in even columns and rows of the
-    // strata: a quarter of them, spread over the whole rectangle) all find `expected`.
+    // §9: whether the shadow rays to the probe samples all find `expected`.
     const auto probe_agrees = [&](T expected) {
         std::uint32_t i = 0, j = 0;
         for (int k0 = 0; k0 < n; k0 += chunk) {
@@ -280,11 +355,13 @@ template <class T, class SceneT>
             place(k0, m, padded, i, j);
             int r = 0;
             for (int k = 0; k < m; ++k)
-                if (((column[k] | (nv > 1 ? row[k] : 0u)) & 1u) == 0u && n_dot_l[k] > T(0))
-                    rays[r++] = {p.from, Vertex<T>{qx[k], qy[k], qz[k]} - p.from};
+                if (is_probe(k) && batch.n_dot_l[k] > T(0))
+                    ray_of[r] = k, rays[r++] = {p.from, Vertex<T>{batch.qx[k], batch.qy[k], batch.qz[k]} - p.from};
             if (r == 0) continue;
             shadow_rays += std::uint64_t(r);
             detail::shadow_visibility(scene, rays, std::size_t(r), s.opaque, one, seen);
+            for (int t = 0; t < r && k0 + ray_of[t] < kept; ++t) probe_seen[k0 + ray_of[t]] = seen[t];
+            probed = std::min(kept, k0 + m);
             for (int t = 0; t < r; ++t)
                 if (seen[t] != expected) return false;
         }
