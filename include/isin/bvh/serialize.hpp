@@ -378,9 +378,15 @@ public:
         };
         // On huge pages where the kernel has them, as the build's arrays (huge_pages.hpp); the
         // arrays' allocator leaves them unwritten until they are read into.
-        detail::reserve_huge_pages(tree.nodes_, std::size_t(nodes));
-        detail::reserve_huge_pages(tree.leaves_, std::size_t(leaves));
-        detail::reserve_huge_pages(tree.primitives_, std::size_t(primitives));
+        // An array of 1 MiB or more is given a huge page's capacity at least (as the build's, which
+        // it reserves larger than they end): its first writes then fault once, not 4 KiB at a time.
+        const auto reserve = [](auto& array, std::size_t n) {
+            const std::size_t huge = detail::huge_page_bytes / sizeof(*array.data());
+            detail::reserve_huge_pages(array, n >= huge / 2 ? std::max(n, huge) : n);
+        };
+        reserve(tree.nodes_, std::size_t(nodes));
+        reserve(tree.leaves_, std::size_t(leaves));
+        reserve(tree.primitives_, std::size_t(primitives));
         tree.nodes_.resize(std::size_t(nodes));
         read_padded(std::size_t(nodes), node_bytes, [&](const unsigned char* p, std::size_t i) {
             get_record(&tree.nodes_[i], p, node_bytes, 48);
