@@ -181,7 +181,7 @@ private:
     // than its parent's); sums in double. A ball's radius is bounded by the smaller of the
     // farthest corner of the child's box and the farthest of its children's balls.
     void build_far_field() {
-        const std::vector<typename Tree::Node>& nodes = bvh_.tree().nodes();
+        const auto& nodes = bvh_.tree().nodes();
         const TriangleBlocks<T>& blocks = bvh_.blocks();
         far_.assign(nodes.size(), FarField{});
         std::vector<double> areas(8 * nodes.size()); // Σ triangle areas of each child, 8 a node
@@ -259,7 +259,7 @@ template <class T>
 T Solid<T>::winding_number(const Vertex<T>& p, T beta) const noexcept {
     if (far_.empty()) return T(0);
     if (!is_finite(p)) return std::numeric_limits<T>::quiet_NaN();
-    const std::vector<typename Tree::Node>& nodes = bvh_.tree().nodes();
+    const auto& nodes = bvh_.tree().nodes();
     const TriangleBlocks<T>& blocks = bvh_.blocks();
     const FarTest is_far{std::max(beta * beta, T(1))}; // NaN stays NaN: nothing is far, the sum is exact
     T sum = T(0);                                      // solid angles, over 4π at the end

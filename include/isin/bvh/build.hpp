@@ -519,8 +519,8 @@ private:
 
     // The 8-wide nodes and leaves a collapse makes: the tree's own, or a subtree's.
     struct Wide {
-        std::vector<Node>& nodes;
-        std::vector<typename BvhTree<T>::Leaf>& leaves;
+        typename BvhTree<T>::template Array<Node>& nodes;
+        typename BvhTree<T>::template Array<typename BvhTree<T>::Leaf>& leaves;
     };
 
     static void set_child(Wide& out, std::size_t node, int slot, const BinaryNode<T>& child, std::uint32_t ref) {
@@ -613,7 +613,7 @@ private:
         return static_cast<std::uint32_t>(index);
     }
 
-    // The tree's primitive order: sized (zeroed) once, then filled range by range.
+    // The tree's primitive order: sized once (not zeroed), then filled range by range.
     void size_order(std::size_t n) {
         reserve_huge_pages(tree_.primitives_, n);
         tree_.primitives_.resize(n);
@@ -635,8 +635,8 @@ private:
             fill_order(prims, leaf.first, leaf.count); // the leaves made so far: above the subtrees
         using Leaf = typename BvhTree<T>::Leaf;
         struct Part {
-            std::vector<Node> nodes;
-            std::vector<Leaf> leaves;
+            typename BvhTree<T>::template Array<Node> nodes;
+            typename BvhTree<T>::template Array<Leaf> leaves;
         };
         std::vector<Part> parts(subtrees.size());
         const auto workers = std::size_t(threads_);

@@ -68,6 +68,27 @@ public:
         buffered_ = n;
     }
 
+    /// Adds `count` records of `bytes` each at p, calling each(k) once the stripes of record k are
+    /// added: the caller's work on a record then runs beside the checksum's chain of multiplies,
+    /// which keeps a core waiting when it runs alone.
+    template <class Each>
+    void update_each(const unsigned char* p, std::size_t count, std::size_t bytes, Each&& each) {
+        const std::size_t n = count * bytes, head = buffered_ ? std::min<std::size_t>(32 - buffered_, n) : 0;
+        update(p, head); // completes the buffer, or takes all
+        std::size_t at = head;
+        std::uint64_t v0 = v_[0], v1 = v_[1], v2 = v_[2], v3 = v_[3];
+        for (std::size_t k = 0; k < count; ++k) {
+            for (const std::size_t end = (k + 1) * bytes; at + 32 <= end; at += 32) {
+                v0 = round(v0, read64(p + at)), v1 = round(v1, read64(p + at + 8));
+                v2 = round(v2, read64(p + at + 16)), v3 = round(v3, read64(p + at + 24));
+            }
+            each(k);
+        }
+        v_[0] = v0, v_[1] = v1, v_[2] = v2, v_[3] = v3;
+        total_ += at - head;
+        update(p + at, n - at); // less than a stripe
+    }
+
     /// The checksum of everything added so far.
     [[nodiscard]] std::uint64_t digest() const noexcept {
         std::uint64_t h;
@@ -103,8 +124,15 @@ private:
     }
     static std::uint64_t read64(const unsigned char* p) noexcept {
         std::uint64_t v = 0;
-        for (int i = 7; i >= 0; --i) v = (v << 8) | p[i]; // little-endian on every host (one load where it is)
+        if (little_endian()) return std::memcpy(&v, p, 8), v; // one load: byte loops are not always merged
+        for (int i = 7; i >= 0; --i) v = (v << 8) | p[i];
         return v;
+    }
+    static bool little_endian() noexcept {
+        const std::uint32_t one = 1;
+        unsigned char first;
+        std::memcpy(&first, &one, 1);
+        return first == 1;
     }
     static std::uint32_t read32(const unsigned char* p) noexcept {
         return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24;
@@ -307,58 +335,75 @@ public:
         // checked while it is in cache: one pass over the Bvh's memory in all. A piece is about
         // 128 KiB: well inside a core's L2, and few enough read calls that their cost is small.
         const auto piece = [](std::size_t bytes) { return std::max<std::size_t>(1, (std::size_t(1) << 17) / bytes); };
-        // Records of `bytes` each straight into `array`, whose elements have no padding beyond them.
+        // Records of `bytes` each straight into `array`, whose elements have no padding beyond them;
+        // each(i) checks record i as soon as it is summed.
         const auto read_straight = [&](void* array, std::size_t count, std::size_t bytes, std::size_t words,
-                                       auto&& check) {
+                                       auto&& each) {
             for (std::size_t i = 0; i < count;) {
-                const std::size_t end = std::min(count, i + piece(bytes));
+                const std::size_t end = std::min(count, i + piece(bytes)), first = i;
                 unsigned char* const to = static_cast<unsigned char*>(array) + i * bytes;
                 read(to, (end - i) * bytes);
-                sum.update(to, (end - i) * bytes);
-                if (swap) swap_words(to, (end - i) * bytes / words, words);
-                check(i, end);
-                i = end;
+                if (swap) {
+                    sum.update(to, (end - i) * bytes);
+                    swap_words(to, (end - i) * bytes / words, words);
+                    for (; i < end; ++i) each(i);
+                } else {
+                    sum.update_each(to, end - i, bytes, [&](std::size_t k) { each(first + k); });
+                    i = end;
+                }
             }
         };
-        // Records of `bytes` each through a buffer of one piece, each handed to store(record, index).
+        // Records of `bytes` each through a buffer of one piece, each handed to each(record, index).
         std::vector<unsigned char> buffer;
-        const auto read_padded = [&](std::size_t count, std::size_t bytes, auto&& store, auto&& check) {
+        const auto read_padded = [&](std::size_t count, std::size_t bytes, auto&& each) {
             buffer.resize(std::min(count, piece(bytes)) * bytes);
             for (std::size_t i = 0; i < count;) {
                 const std::size_t end = std::min(count, i + piece(bytes)), first = i;
                 read(buffer.data(), (end - i) * bytes);
-                sum.update(buffer.data(), (end - i) * bytes);
-                for (const unsigned char* p = buffer.data(); i < end; ++i, p += bytes) store(p, i);
-                check(first, end);
+                sum.update_each(buffer.data(), end - i, bytes,
+                                [&](std::size_t k) { each(buffer.data() + k * bytes, first + k); });
+                i = end;
             }
         };
-        const auto nothing = [](std::size_t, std::size_t) {};
-        // On huge pages where the kernel has them, as the build's arrays (huge_pages.hpp); the
-        // blocks' allocator maps its own and leaves them unwritten until they are read into.
-        detail::reserve_huge_pages(tree.nodes_, std::size_t(nodes));
-        detail::reserve_huge_pages(tree.leaves_, std::size_t(leaves));
-        detail::reserve_huge_pages(tree.primitives_, std::size_t(primitives));
-        // Nodes appended one by one: resize would first zero the whole array, a second pass.
-        const auto append_node = [&](const unsigned char* p, std::size_t) {
-            Node n;
-            get_record(&n, p, node_bytes, 48);
-            tree.nodes_.push_back(n);
+        // Arrays of uint32 checked later (leaves and primitives, by the blocks' check).
+        const auto read_words = [&](void* array, std::size_t bytes) {
+            for (std::size_t i = 0; i < bytes;) {
+                const std::size_t n = std::min(bytes - i, std::size_t(1) << 17);
+                unsigned char* const to = static_cast<unsigned char*>(array) + i;
+                read(to, n);
+                sum.update(to, n);
+                if (swap) swap_words(to, n / 4, 4);
+                i += n;
+            }
         };
-        read_padded(std::size_t(nodes), node_bytes, append_node,
-                    [&](std::size_t i, std::size_t end) { checker.nodes(i, end); });
+        // On huge pages where the kernel has them, as the build's arrays (huge_pages.hpp); the
+        // arrays' allocator leaves them unwritten until they are read into.
+        // An array of 1 MiB or more is given a huge page's capacity at least (as the build's, which
+        // it reserves larger than they end): its first writes then fault once, not 4 KiB at a time.
+        const auto reserve = [](auto& array, std::size_t n) {
+            const std::size_t huge = detail::huge_page_bytes / sizeof(*array.data());
+            detail::reserve_huge_pages(array, n >= huge / 2 ? std::max(n, huge) : n);
+        };
+        reserve(tree.nodes_, std::size_t(nodes));
+        reserve(tree.leaves_, std::size_t(leaves));
+        reserve(tree.primitives_, std::size_t(primitives));
+        tree.nodes_.resize(std::size_t(nodes));
+        read_padded(std::size_t(nodes), node_bytes, [&](const unsigned char* p, std::size_t i) {
+            get_record(&tree.nodes_[i], p, node_bytes, 48);
+            checker.node(i);
+        });
         tree.leaves_.resize(std::size_t(leaves));
-        read_straight(tree.leaves_.data(), std::size_t(leaves), leaf_bytes, 4, nothing);
+        read_words(tree.leaves_.data(), std::size_t(leaves) * leaf_bytes);
         tree.primitives_.resize(std::size_t(primitives));
-        read_straight(tree.primitives_.data(), std::size_t(primitives), primitive_bytes, 4, nothing);
+        read_words(tree.primitives_.data(), std::size_t(primitives) * primitive_bytes);
         blocks.resize(std::size_t(leaves));
-        const auto check_blocks = [&](std::size_t i, std::size_t end) { checker.blocks(i, end); };
         if (sizeof(Block) == block_bytes && !swap)
-            read_straight(blocks.data(), std::size_t(leaves), block_bytes, 1, check_blocks);
+            read_straight(blocks.data(), std::size_t(leaves), block_bytes, 1, [&](std::size_t l) { checker.block(l); });
         else
-            read_padded(
-                std::size_t(leaves), block_bytes,
-                [&](const unsigned char* p, std::size_t i) { get_record(&blocks[i], p, block_bytes, 72); },
-                check_blocks);
+            read_padded(std::size_t(leaves), block_bytes, [&](const unsigned char* p, std::size_t l) {
+                get_record(&blocks[l], p, block_bytes, 72);
+                checker.block(l);
+            });
         unsigned char stored[checksum_bytes];
         read(stored, checksum_bytes);
         if (sum.digest() != get64(stored)) throw fail("checksum mismatch (a damaged file)");
@@ -389,57 +434,54 @@ private:
             if (nodes) level_[0] = 1;
         }
 
-        // Checks nodes [begin, end), after those before them.
-        void nodes(std::size_t begin, std::size_t end) {
-            const Tree& tree = bvh_.tree_;
+        // Checks node i, after those before it.
+        void node(std::size_t i) {
+            if (!wrong_.empty()) return;
+            const Node& n = bvh_.tree_.nodes_[i];
             const std::size_t nodes = level_.size(), leaves = reached_.size();
-            for (std::size_t i = begin; i < end && wrong_.empty(); ++i) {
-                if (!level_[i])
-                    return set("index out of range: node " + std::to_string(i) + " is not reached from the root");
-                deepest_ = std::max<std::uint32_t>(deepest_, level_[i]);
-                for (int k = 0; k < 8; ++k) {
-                    const std::uint32_t c = tree.nodes_[i].child[k];
-                    if (c == Tree::empty_child) { // never entered only with the empty box: traversal relies on it
-                        if (!empty_box(tree.nodes_[i], k))
-                            return set("node " + std::to_string(i) + " child " + std::to_string(k) +
-                                       " is empty, its box not");
-                        continue;
-                    }
-                    const auto at = [&] { return "node " + std::to_string(i) + " child " + std::to_string(k); };
-                    if (c & Tree::leaf_bit) {
-                        const std::uint32_t leaf = c & ~Tree::leaf_bit;
-                        if (leaf >= leaves)
-                            return set("index out of range: " + at() + " is leaf " + std::to_string(leaf) + " of " +
-                                       std::to_string(leaves));
-                        if (reached_[leaf]++) return set(at() + ": leaf " + std::to_string(leaf) + " reached twice");
-                    } else {
-                        if (c <= i || c >= nodes)
-                            return set("index out of range: " + at() + " is node " + std::to_string(c) + " (after " +
-                                       std::to_string(i) + ", before " + std::to_string(nodes) + ")");
-                        if (level_[c]) return set(at() + ": node " + std::to_string(c) + " reached twice");
-                        if (level_[i] >= depth_)
-                            return set(at() + ": deeper than the depth of " + std::to_string(depth_));
-                        level_[c] = std::uint8_t(level_[i] + 1);
-                    }
+            if (!level_[i])
+                return set("index out of range: node " + std::to_string(i) + " is not reached from the root");
+            deepest_ = std::max<std::uint32_t>(deepest_, level_[i]);
+            for (int k = 0; k < 8; ++k) {
+                const std::uint32_t c = n.child[k];
+                if (c == Tree::empty_child) { // never entered only with the empty box: traversal relies on it
+                    if (!empty_box(n, k))
+                        return set("node " + std::to_string(i) + " child " + std::to_string(k) +
+                                   " is empty, its box not");
+                    continue;
+                }
+                const auto at = [&] { return "node " + std::to_string(i) + " child " + std::to_string(k); };
+                if (c & Tree::leaf_bit) {
+                    const std::uint32_t leaf = c & ~Tree::leaf_bit;
+                    if (leaf >= leaves)
+                        return set("index out of range: " + at() + " is leaf " + std::to_string(leaf) + " of " +
+                                   std::to_string(leaves));
+                    if (reached_[leaf]++) return set(at() + ": leaf " + std::to_string(leaf) + " reached twice");
+                } else {
+                    if (c <= i || c >= nodes)
+                        return set("index out of range: " + at() + " is node " + std::to_string(c) + " (after " +
+                                   std::to_string(i) + ", before " + std::to_string(nodes) + ")");
+                    if (level_[c]) return set(at() + ": node " + std::to_string(c) + " reached twice");
+                    if (level_[i] >= depth_) return set(at() + ": deeper than the depth of " + std::to_string(depth_));
+                    level_[c] = std::uint8_t(level_[i] + 1);
                 }
             }
         }
 
-        // Checks leaves and blocks [begin, end), after every node, leaf and primitive is read.
-        void blocks(std::size_t begin, std::size_t end) {
+        // Checks leaf l and its block, after every node, leaf and primitive is read.
+        void block(std::size_t l) {
+            if (!wrong_.empty()) return;
             const Tree& tree = bvh_.tree_;
             const std::size_t primitives = tree.primitives_.size();
-            for (std::size_t l = begin; l < end && wrong_.empty(); ++l) {
-                if (!reached_[l])
-                    return set("index out of range: leaf " + std::to_string(l) + " is not reached from the root");
-                const Leaf& leaf = tree.leaves_[l];
-                if (leaf.count < 1 || leaf.count > 8 || leaf.first > primitives || primitives - leaf.first < leaf.count)
-                    return set("index out of range: leaf " + std::to_string(l) + " holds primitives [" +
-                               std::to_string(leaf.first) + ", +" + std::to_string(leaf.count) + ") of " +
-                               std::to_string(primitives));
-                if (!holds(bvh_.blocks_[l], &tree.primitives_[leaf.first], leaf.count))
-                    return set("block " + std::to_string(l) + " is not its leaf's (its primitives or padding differ)");
-            }
+            if (!reached_[l])
+                return set("index out of range: leaf " + std::to_string(l) + " is not reached from the root");
+            const Leaf& leaf = tree.leaves_[l];
+            if (leaf.count < 1 || leaf.count > 8 || leaf.first > primitives || primitives - leaf.first < leaf.count)
+                return set("index out of range: leaf " + std::to_string(l) + " holds primitives [" +
+                           std::to_string(leaf.first) + ", +" + std::to_string(leaf.count) + ") of " +
+                           std::to_string(primitives));
+            if (!holds(bvh_.blocks_[l], &tree.primitives_[leaf.first], leaf.count))
+                return set("block " + std::to_string(l) + " is not its leaf's (its primitives or padding differ)");
         }
 
         // The first reason found, or the checks that need the whole tree.

@@ -67,6 +67,10 @@ public:
     struct Leaf {
         std::uint32_t first, count;
     };
+    /// The tree's arrays: blocks of 2 MiB or more on huge pages of their own, unmapped with the
+    /// tree; resized without zeroing, since the build and the loader write every element.
+    template <class V>
+    using Array = std::vector<V, detail::UninitAllocator<V>>;
 
     /// Number of primitives in the tree (those with usable boxes).
     [[nodiscard]] std::size_t size() const noexcept { return primitives_.size(); }
@@ -76,10 +80,10 @@ public:
     /// Levels of 8-wide nodes on the longest path from the root to a leaf (0 when empty).
     [[nodiscard]] int depth() const noexcept { return nodes_.empty() ? 0 : depth_below(0); }
 
-    [[nodiscard]] const std::vector<Node>& nodes() const noexcept { return nodes_; }
-    [[nodiscard]] const std::vector<Leaf>& leaves() const noexcept { return leaves_; }
+    [[nodiscard]] const Array<Node>& nodes() const noexcept { return nodes_; }
+    [[nodiscard]] const Array<Leaf>& leaves() const noexcept { return leaves_; }
     /// Primitive indices, leaf after leaf.
-    [[nodiscard]] const std::vector<std::uint32_t>& primitives() const noexcept { return primitives_; }
+    [[nodiscard]] const Array<std::uint32_t>& primitives() const noexcept { return primitives_; }
     /// The largest |coordinate| of any box: traversal checks with it whether a ray's slab
     /// products can overflow.
     [[nodiscard]] T bound() const noexcept { return bound_; }
@@ -194,9 +198,9 @@ private:
         return deepest + 1;
     }
 
-    std::vector<Node> nodes_;
-    std::vector<Leaf> leaves_;
-    std::vector<std::uint32_t> primitives_;
+    Array<Node> nodes_;
+    Array<Leaf> leaves_;
+    Array<std::uint32_t> primitives_;
     T bound_ = T(0);
     T leaf_scale_ = T(0);
 };
