@@ -12,6 +12,7 @@
 #include <type_traits>
 
 #include "color.hpp"
+#include "detail/attributes.hpp"
 #include "simd/pack.hpp"
 #include "ray.hpp"
 #include "shading.hpp"
@@ -299,9 +300,10 @@ template <class T, class SceneT>
     const bool highlight = p.ks != T(0); // without, the highlight sum is not needed (0·sum adds nothing)
     constexpr int chunk = detail::LightSampleChunk<T>::size;
     detail::LightSampleChunk<T> batch;
-    alignas(64) T one[chunk], seen[chunk];
-    Ray<T> rays[chunk];
-    int ray_of[chunk]; // each shadow ray's sample
+    constexpr auto room = std::size_t(chunk);
+    alignas(64) T one[room], seen[room];
+    Ray<T> rays[room];
+    int ray_of[room]; // each shadow ray's sample
     for (T& t : one) t = T(1);
     V diffuse_sum = V(T(0)), specular_sum = V(T(0));
     const auto load = [](const T* a) { return detail::load_lanes<T, V>(a); };
