@@ -95,11 +95,24 @@ ISIN_DETAIL_INLINE void triangle_lower_bounds(const TriangleBlock<T>& b, const T
     }
     sqrt8(scale2, scale);
     const T eps = std::numeric_limits<T>::epsilon();
+#if ISIN_VECTOR_EXTENSIONS // in lane vectors: GCC keeps the division under the condition, one lane at a time
+    using V = L8<T>;
+    V sv, nv, sc, box;
+    std::memcpy(&sv, s, sizeof sv), std::memcpy(&nv, nn, sizeof nv);
+    std::memcpy(&sc, scale, sizeof sc), std::memcpy(&box, d2, sizeof box);
+    const V gap = (sv < V{} ? -sv : sv) - T(32) * eps * sc;
+    const V t = gap < V{} ? V{} : gap;
+    const auto slanted = nv > V{};
+    const V plane = slanted ? t * t / (slanted ? nv : V{} + T(1)) * (T(1) - T(16) * eps) : V{};
+    const V bound = box < plane ? plane : box; // a NaN plane leaves the box's
+    std::memcpy(d2, &bound, sizeof d2);
+#else
     for (int k = 0; k < 8; ++k) {
         const T t = std::max(std::fabs(s[k]) - T(32) * eps * scale[k], T(0));
         const T plane2 = nn[k] > T(0) ? t * t / nn[k] * (T(1) - T(16) * eps) : T(0);
         d2[k] = std::max(d2[k], plane2); // a NaN plane2 leaves the box's
     }
+#endif
 }
 
 /// closest_point (below) with the sphere's squared radius starting at `start2` (max_distance²,
