@@ -307,9 +307,6 @@ template <class T, class SceneT>
     for (T& t : one) t = T(1);
     V diffuse_sum = V(T(0)), specular_sum = V(T(0));
     const auto load = [](const T* a) { return detail::load_lanes<T, V>(a); };
-    const auto place = [&](int k0, int m, int padded, std::uint32_t& i, std::uint32_t& j) {
-        batch.place(light, p, seeds, nu, nv, inv_n, k0, m, padded, i, j);
-    };
     // The probe samples: those in even columns and rows of the strata (a quarter, over the whole rectangle).
     const auto is_probe = [&](int k) { return ((batch.column[k] | (nv > 1 ? batch.row[k] : 0u)) & 1u) == 0u; };
     // What the probes' shadow rays found, for samples [0, probed) (a penumbra's pass reuses them).
@@ -321,7 +318,7 @@ template <class T, class SceneT>
         std::uint32_t i = 0, j = 0;
         for (int k0 = 0; k0 < n; k0 += chunk) {
             const int m = std::min(chunk, n - k0), padded = (m + W - 1) / W * W;
-            place(k0, m, padded, i, j);
+            batch.place(light, p, seeds, nu, nv, inv_n, k0, m, padded, i, j);
             if (assumed >= T(0) || !s.shadows) {
                 const T visible = s.shadows ? assumed : T(1);
                 for (int k = 0; k < padded; ++k) batch.through[k] = visible;
@@ -354,7 +351,7 @@ template <class T, class SceneT>
         std::uint32_t i = 0, j = 0;
         for (int k0 = 0; k0 < n; k0 += chunk) {
             const int m = std::min(chunk, n - k0), padded = (m + W - 1) / W * W;
-            place(k0, m, padded, i, j);
+            batch.place(light, p, seeds, nu, nv, inv_n, k0, m, padded, i, j);
             int r = 0;
             for (int k = 0; k < m; ++k)
                 if (is_probe(k) && batch.n_dot_l[k] > T(0))
