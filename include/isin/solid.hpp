@@ -22,6 +22,7 @@
 
 #include "simd/sqrt.hpp"
 #include "bvh/triangle_bvh.hpp"
+#include "detail/attributes.hpp"
 #include "detail/parallel.hpp"
 #include "indexed_mesh.hpp"
 #include "point_hit.hpp"
@@ -30,17 +31,45 @@
 
 namespace isin {
 
+/// The winding number at a point with a bound on its error: |value − w(p)| ≤ error_bound, w(p)
+/// the exact generalized winding number of the solid's triangles (docs/queries.md, "the bound").
+template <class T>
+struct WindingNumber {
+    static_assert(std::is_floating_point_v<T>, "isin::WindingNumber needs float or double");
+    T value;       ///< the fast winding number, the same as Solid::winding_number(p, beta)
+    T error_bound; ///< truncation + rounding, ≥ 0; +∞ for a non-finite p
+    T truncation;  ///< the far field's part of error_bound; 0 when every triangle is summed exactly
+};
+
+namespace detail {
+
+/// Van Oosterom & Strackee's numerator and denominator for triangle (v0, v1, v2) seen from p,
+/// and |a||b||c| (the scale of their rounding errors).
+template <class T>
+struct VosTerms {
+    T num, den, abc;
+};
+
+template <class T>
+[[nodiscard]] inline VosTerms<T> vos_terms(const Vertex<T>& p, const Triangle<T>& tri) noexcept {
+    const Vertex<T> a = tri.v0 - p, b = tri.v1 - p, c = tri.v2 - p;
+    const T la = length(a), lb = length(b), lc = length(c);
+    const T abc = la * lb * lc;
+    const T num = dot(a, cross(b, c));                                    // VOS: a·(b×c)
+    const T den = abc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb; // VOS: denominator
+    return {num, den, abc};
+}
+
+} // namespace detail
+
 /// The solid angle of triangle (a, b, c) seen from p, signed (positive where p sees its back
 /// side: isin::normal points away from p), by Van Oosterom & Strackee (1983):
 /// tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (b·c)|a| + (c·a)|b|), a, b, c relative to p.
 /// In (−2π, 2π]; NaN for NaN input.
 template <class T>
 [[nodiscard]] inline T solid_angle(const Vertex<T>& p, const Triangle<T>& tri) noexcept {
-    const Vertex<T> a = tri.v0 - p, b = tri.v1 - p, c = tri.v2 - p;
-    const T la = length(a), lb = length(b), lc = length(c);
-    const T num = dot(a, cross(b, c));                                             // VOS: a·(b×c)
-    const T den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb; // VOS: denominator
-    return T(2) * std::atan2(num, den);                                            // VOS: Ω = 2·atan2(num, den)
+    const detail::VosTerms<T> t = detail::vos_terms(p, tri);
+    return T(2) * std::atan2(t.num, t.den); // VOS: Ω = 2·atan2(num, den)
 }
 
 /// A closed (or not quite closed) triangle mesh as a solid: winding number, inside/outside,
@@ -64,7 +93,16 @@ public:
     /// 1 inside a closed mesh, 0 outside, up to the expansion's error (see docs/queries.md).
     [[nodiscard]] T winding_number(const Vertex<T>& p) const noexcept { return winding_number(p, beta_); }
     /// The same with another accuracy `beta` (+∞: exact).
-    [[nodiscard]] T winding_number(const Vertex<T>& p, T beta) const noexcept;
+    [[nodiscard]] T winding_number(const Vertex<T>& p, T beta) const noexcept { return walk<false>(p, beta).value; }
+    /// The winding number at p with this solid's beta and a bound on its error (far-field
+    /// truncation and floating-point rounding); `value` is winding_number(p), bit for bit.
+    [[nodiscard]] WindingNumber<T> winding_number_bounded(const Vertex<T>& p) const noexcept {
+        return walk<true>(p, beta_);
+    }
+    /// The same with another accuracy `beta` (+∞ or NaN: exact, truncation 0).
+    [[nodiscard]] WindingNumber<T> winding_number_bounded(const Vertex<T>& p, T beta) const noexcept {
+        return walk<true>(p, beta);
+    }
     /// The exact generalized winding number: Σ solid_angle / 4π over every triangle, O(n).
     [[nodiscard]] T winding_number_exact(const Vertex<T>& p) const noexcept {
         T sum = T(0);
@@ -107,15 +145,53 @@ public:
 
 private:
     static constexpr T pi = T(3.14159265358979323846);
+    static constexpr T u = std::numeric_limits<T>::epsilon() / 2; // unit roundoff
+    static constexpr T inf = std::numeric_limits<T>::infinity();
     using Tree = BvhTree<T>;
 
     // The far field of a node's 8 children, in lanes: each child's dipole (the sum of its
-    // triangles' area vectors, placed at their area-weighted centroid `c`) and the squared
-    // radius of a ball round c holding every vertex. An empty slot has a zero dipole and an
+    // triangles' area vectors, placed at their area-weighted centroid `c`), the squared
+    // radius of a ball round c holding every vertex, and the sum of its triangles' unsigned
+    // areas (rounded up: the error bound's A). An empty slot has a zero dipole and area and an
     // infinite radius (never far, never entered).
     struct alignas(64) FarField {
-        T c[3][8], a[3][8], r2[8];
+        T c[3][8], a[3][8], r2[8], area[8];
     };
+
+    // What a bounded walk adds up, in 4π·w units: the far field's truncation bound, the scale
+    // of the dipoles' rounding (Σ A/d², leaves' (A + |e|² + |f|²)/d²), the exact solid angles'
+    // rounding bounds and Σ|Ω|, and the number of terms summed.
+    struct Tally {
+        T truncation = T(0), dipole_scale = T(0), exact_rounding = T(0), exact_abs = T(0), terms = T(0);
+    };
+
+    // The most a cluster's dipole can be off its triangles' solid angles, A its unsigned area, r
+    // its ball's radius, d the distance from p to the ball's centre, K(y) = y/|y|³:
+    // A·max_{|x−c|≤r} |K(x−p) − K(c−p)| = A·(1/(d−r)² − 1/d²). One flat triangle about its
+    // centroid (`flat`): A·(1/(d−r)² − 1/d² − 2r/d³), the first-order term being 0. d moved down
+    // and r up by their rounding; +∞ unless d > r.
+    [[nodiscard]] static T truncation_bound(T A, T d, T r, bool flat) noexcept {
+        if (!(A > T(0))) return T(0);
+        const T dl = d * (T(1) - T(4) * u), ru = r * (T(1) + T(16) * u) + T(4) * u * d;
+        if (!(dl > ru)) return inf;
+        const T g = dl - ru;
+        const T bound =
+            flat ? A * (ru * ru * (T(3) * dl - T(2) * ru)) / ((dl * dl * dl) * (g * g)) // r²(3d−2r)/(d³(d−r)²)
+                 : A * (ru * (T(2) * dl - ru)) / ((dl * dl) * (g * g));                 // r(2d−r)/(d²(d−r)²)
+        return bound == bound ? bound : inf;
+    }
+
+    // The most a computed solid angle can be off (first order in u, constants rounded up):
+    // |δnum| + |δden| ≤ 72u·|a||b||c| moves (den, num) by at most D, which turns atan2 by at most
+    // (π/2)·D/|(den, num)| unless the disc of radius D reaches the cut (num = 0, den ≤ 0) or the
+    // origin (then 4π); atan2 within 2 ulps.
+    [[nodiscard]] static T angle_rounding(const detail::VosTerms<T>& t) noexcept {
+        const T D = T(72) * u * t.abc;
+        const T R = std::sqrt(t.num * t.num + t.den * t.den);
+        const T to_cut = t.den > T(0) ? R : std::fabs(t.num);
+        if (!(to_cut > D)) return T(4) * pi;
+        return pi * D / R + T(8) * pi * u; // |ΔΩ| ≤ 2·arcsin(D/R) + 2·(2 ulps of π)
+    }
 
     [[nodiscard]] static Triangle<T> lane(const detail::TriangleBlock<T>& b, int k) noexcept {
         return {{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]},
@@ -151,11 +227,14 @@ private:
     }
 
     // 4π·w of one leaf's triangles at p: each triangle seen from beyond beta·(its radius) as its
-    // own dipole (centred on its centroid), the others by their exact solid angle.
-    [[nodiscard]] static T leaf_sum(const detail::TriangleBlock<T>& b, const Vertex<T>& p,
-                                    const FarTest& is_far) noexcept {
+    // own dipole (centred on its centroid), the others by their exact solid angle. Bounded: adds
+    // each term's truncation and rounding to `tally`.
+    // Out of line: inlined into the walk, it costs the walk more instructions than the call saves.
+    template <bool Bounded>
+    [[nodiscard]] ISIN_DETAIL_NOINLINE static T leaf_sum(const detail::TriangleBlock<T>& b, const Vertex<T>& p,
+                                                         const FarTest& is_far, Tally* tally) noexcept {
         const int live = detail::live_lanes(b);
-        T ax[8], ay[8], az[8], rx[8], ry[8], rz[8], d2[8], far[8];
+        T ax[8], ay[8], az[8], rx[8], ry[8], rz[8], d2[8], far[8], r2s[8], ws[8];
         for (int k = 0; k < 8; ++k) {
             const T x0 = b.v[0][0][k], y0 = b.v[0][1][k], z0 = b.v[0][2][k];
             const T ex = b.v[1][0][k] - x0, ey = b.v[1][1][k] - y0, ez = b.v[1][2][k] - z0;
@@ -170,12 +249,39 @@ private:
             rx[k] = (x0 - p.x) + gx, ry[k] = (y0 - p.y) + gy, rz[k] = (z0 - p.z) + gz;
             d2[k] = rx[k] * rx[k] + ry[k] * ry[k] + rz[k] * rz[k];
             far[k] = T((k < live) & is_far(d2[k], r2));
+            if constexpr (Bounded) r2s[k] = r2, ws[k] = (ex * ex + ey * ey + ez * ez) + (fx * fx + fy * fy + fz * fz);
         }
         T sum = dipoles(ax, ay, az, rx, ry, rz, d2, far);
-        for (int k = 0; k < live; ++k)
-            if (far[k] == T(0)) sum += solid_angle(p, lane(b, k));
+        if constexpr (Bounded) {
+            tally->terms += T(8);
+            for (int k = 0; k < live; ++k) {
+                if (far[k] == T(0)) continue;
+                // The area from rounded edges e, f: off by at most 1.25u·(|e|² + |f|²).
+                const T A =
+                    std::sqrt(ax[k] * ax[k] + ay[k] * ay[k] + az[k] * az[k]) * (T(1) + T(4) * u) + T(2) * u * ws[k];
+                tally->truncation += truncation_bound(A, std::sqrt(d2[k]), std::sqrt(r2s[k]), true);
+                tally->dipole_scale += (T(2) * A + ws[k]) / d2[k]; // A again: the rounded centroid's first-order term
+            }
+        }
+        for (int k = 0; k < live; ++k) {
+            if (far[k] != T(0)) continue;
+            if constexpr (Bounded) {
+                const detail::VosTerms<T> t = detail::vos_terms(p, lane(b, k));
+                const T omega = T(2) * std::atan2(t.num, t.den); // VOS: Ω = 2·atan2(num, den), as solid_angle
+                sum += omega;
+                tally->exact_rounding += angle_rounding(t);
+                tally->exact_abs += std::fabs(omega);
+                tally->terms += T(1);
+            } else {
+                sum += solid_angle(p, lane(b, k));
+            }
+        }
         return sum;
     }
+
+    // The far-field walk: the winding number and, when Bounded, its error bound.
+    template <bool Bounded>
+    [[nodiscard]] WindingNumber<T> walk(const Vertex<T>& p, T beta) const noexcept;
 
     // Each node's FarField from its children's, children first (a child node's index is larger
     // than its parent's); sums in double. A ball's radius is bounded by the smaller of the
@@ -200,6 +306,7 @@ private:
                     areas[8 * i + std::size_t(k)] = 0;
                     for (int axis = 0; axis < 3; ++axis) f.c[axis][k] = f.a[axis][k] = T(0);
                     f.r2[k] = std::numeric_limits<T>::infinity();
+                    f.area[k] = T(0);
                     continue;
                 }
                 if (ref & Tree::leaf_bit) {
@@ -212,6 +319,7 @@ private:
                         a += N, total += length(N), weighted += length(N) * ((v0 + v1 + v2) / 3.0);
                     }
                     if (total > 0) c = weighted / total; // Barill: the area-weighted centroid
+                    c = to_double(to_t(c));              // the ball is round the centre the walk uses
                     double r2 = 0;
                     for (int m = 0; m < live; ++m) {
                         const Triangle<T> t = lane(b, m);
@@ -228,6 +336,7 @@ private:
                                     Vertex<double>{double(g.c[0][m]), double(g.c[1][m]), double(g.c[2][m])};
                     }
                     if (total > 0) c = weighted / total;
+                    c = to_double(to_t(c));
                     double by_balls = 0;
                     for (int m = 0; m < 8; ++m) {
                         if (nodes[ref].child[m] == Tree::empty_child) continue;
@@ -241,7 +350,8 @@ private:
                 areas[8 * i + std::size_t(k)] = total;
                 f.c[0][k] = T(c.x), f.c[1][k] = T(c.y), f.c[2][k] = T(c.z);
                 f.a[0][k] = T(a.x), f.a[1][k] = T(a.y), f.a[2][k] = T(a.z);
-                f.r2[k] = T(r * r * (1 + 1e-6)); // rounded up: the ball holds every vertex after rounding to T
+                f.r2[k] = T(r * r * (1 + 1e-6));   // rounded up: the ball holds every vertex after rounding to T
+                f.area[k] = T(total * (1 + 1e-6)); // rounded up, as the error bound needs
             }
         }
     }
@@ -249,6 +359,7 @@ private:
     [[nodiscard]] static Vertex<double> to_double(const Vertex<T>& v) noexcept {
         return {double(v.x), double(v.y), double(v.z)};
     }
+    [[nodiscard]] static Vertex<T> to_t(const Vertex<double>& v) noexcept { return {T(v.x), T(v.y), T(v.z)}; }
 
     Bvh<T> bvh_;
     T beta_;
@@ -256,13 +367,15 @@ private:
 };
 
 template <class T>
-T Solid<T>::winding_number(const Vertex<T>& p, T beta) const noexcept {
-    if (far_.empty()) return T(0);
-    if (!is_finite(p)) return std::numeric_limits<T>::quiet_NaN();
+template <bool Bounded>
+WindingNumber<T> Solid<T>::walk(const Vertex<T>& p, T beta) const noexcept {
+    if (far_.empty()) return {T(0), T(0), T(0)};
+    if (!is_finite(p)) return {std::numeric_limits<T>::quiet_NaN(), inf, inf};
     const auto& nodes = bvh_.tree().nodes();
     const TriangleBlocks<T>& blocks = bvh_.blocks();
     const FarTest is_far{std::max(beta * beta, T(1))}; // NaN stays NaN: nothing is far, the sum is exact
     T sum = T(0);                                      // solid angles, over 4π at the end
+    Tally tally;
     std::uint32_t stack[Tree::depth_limit * 7 + 8];
     int top = 0;
     stack[top++] = 0;
@@ -276,16 +389,38 @@ T Solid<T>::winding_number(const Vertex<T>& p, T beta) const noexcept {
             far[k] = T(is_far(d2[k], f.r2[k])); // an empty slot never is (infinite radius)
         }
         sum += dipoles(f.a[0], f.a[1], f.a[2], rx, ry, rz, d2, far);
+        if constexpr (Bounded) {
+            tally.terms += T(8);
+            for (int k = 0; k < 8; ++k) {
+                if (far[k] == T(0)) continue;
+                tally.truncation += truncation_bound(f.area[k], std::sqrt(d2[k]), std::sqrt(f.r2[k]), false);
+                tally.dipole_scale += f.area[k] / d2[k];
+            }
+        }
         for (int k = 0; k < 8; ++k) {
             const std::uint32_t ref = nodes[i].child[k];
             if (far[k] != T(0) || ref == Tree::empty_child) continue;
             if (ref & Tree::leaf_bit)
-                sum += leaf_sum(blocks[ref & ~Tree::leaf_bit], p, is_far);
+                sum += leaf_sum<Bounded>(blocks[ref & ~Tree::leaf_bit], p, is_far, &tally);
             else
                 stack[top++] = ref;
         }
     }
-    return sum / (T(4) * pi);
+    const T value = sum / (T(4) * pi);
+    if constexpr (!Bounded) {
+        return {value, T(0), T(0)};
+    } else {
+        // Recursive summation of n terms: off by at most γ_n·Σ|terms| (Higham, Accuracy and
+        // Stability of Numerical Algorithms, §4.2); each dipole within 16u of its scale.
+        const T nu = tally.terms * u;
+        const T gamma = nu < T(0.5) ? nu / (T(1) - nu) : inf;
+        const T rounding =
+            T(16) * u * tally.dipole_scale + tally.exact_rounding + gamma * (tally.dipole_scale + tally.exact_abs);
+        const T up = T(1) + T(2) * gamma + T(32) * u; // the bound's own rounding, upwards
+        const T truncation = tally.truncation / (T(4) * pi) * up;
+        const T bound = ((tally.truncation + rounding) / (T(4) * pi) + T(2) * u * std::fabs(value)) * up;
+        return {value, bound == bound ? bound : inf, truncation == truncation ? truncation : inf};
+    }
 }
 
 } // namespace isin
