@@ -159,10 +159,12 @@ private:
     };
 
     // What a bounded walk adds up, in 4π·w units: the far field's truncation bound, the scale
-    // of the dipoles' rounding (Σ A/d², leaves' (A + |e|² + |f|²)/d²), the exact solid angles'
-    // rounding bounds and Σ|Ω|, and the number of terms summed.
+    // of the dipoles' rounding (Σ A/d², leaves' (2A + |e|² + |f|²)/d²) and of the nodes' alone
+    // (their stored a's error), the exact solid angles' rounding bounds and Σ|Ω|, and the
+    // number of terms summed.
     struct Tally {
-        T truncation = T(0), dipole_scale = T(0), exact_rounding = T(0), exact_abs = T(0), terms = T(0);
+        T truncation = T(0), dipole_scale = T(0), node_scale = T(0), exact_rounding = T(0), exact_abs = T(0),
+          terms = T(0);
     };
 
     // The most a cluster's dipole can be off its triangles' solid angles, A its unsigned area, r
@@ -291,19 +293,24 @@ private:
         const TriangleBlocks<T>& blocks = bvh_.blocks();
         far_.assign(nodes.size(), FarField{});
         std::vector<double> areas(8 * nodes.size()); // Σ triangle areas of each child, 8 a node
+        // For the error bound, each child's: Σ areas rounded up, and how far its stored a may be
+        // from the exact Σ of its area vectors (rounding to T at every level below, double sums).
+        std::vector<double> uppers(8 * nodes.size()), errs(8 * nodes.size());
+        constexpr double ud = std::numeric_limits<double>::epsilon() / 2;
+        double worst = 0; // the largest errs / uppers
         for (std::size_t i = nodes.size(); i-- > 0;) {
             FarField& f = far_[i];
             for (int k = 0; k < 8; ++k) {
                 const std::uint32_t ref = nodes[i].child[k];
                 Vertex<double> a{0, 0, 0}, weighted{0, 0, 0};
-                double total = 0, r = 0;
+                double total = 0, r = 0, upper = 0, err = 0;
                 const Vertex<double> lo{double(nodes[i].lo[0][k]), double(nodes[i].lo[1][k]),
                                         double(nodes[i].lo[2][k])};
                 const Vertex<double> hi{double(nodes[i].hi[0][k]), double(nodes[i].hi[1][k]),
                                         double(nodes[i].hi[2][k])};
                 Vertex<double> c = 0.5 * lo + 0.5 * hi;
                 if (ref == Tree::empty_child) {
-                    areas[8 * i + std::size_t(k)] = 0;
+                    areas[8 * i + std::size_t(k)] = uppers[8 * i + std::size_t(k)] = errs[8 * i + std::size_t(k)] = 0;
                     for (int axis = 0; axis < 3; ++axis) f.c[axis][k] = f.a[axis][k] = T(0);
                     f.r2[k] = std::numeric_limits<T>::infinity();
                     f.area[k] = T(0);
@@ -317,7 +324,10 @@ private:
                         const Vertex<double> v0 = to_double(t.v0), v1 = to_double(t.v1), v2 = to_double(t.v2);
                         const Vertex<double> N = 0.5 * cross(v1 - v0, v2 - v0); // Barill: area vector
                         a += N, total += length(N), weighted += length(N) * ((v0 + v1 + v2) / 3.0);
+                        err += 2.5 * ud * length(v1 - v0) * length(v2 - v0); // N from rounded edges
                     }
+                    err += 8 * ud * (total + err); // the sums of 8
+                    upper = total + err;
                     if (total > 0) c = weighted / total; // Barill: the area-weighted centroid
                     c = to_double(to_t(c));              // the ball is round the centre the walk uses
                     double r2 = 0;
@@ -334,7 +344,10 @@ private:
                         total += areas[8 * std::size_t(ref) + std::size_t(m)];
                         weighted += areas[8 * std::size_t(ref) + std::size_t(m)] *
                                     Vertex<double>{double(g.c[0][m]), double(g.c[1][m]), double(g.c[2][m])};
+                        upper += uppers[8 * std::size_t(ref) + std::size_t(m)];
+                        err += errs[8 * std::size_t(ref) + std::size_t(m)];
                     }
+                    err += 8 * ud * upper;
                     if (total > 0) c = weighted / total;
                     c = to_double(to_t(c));
                     double by_balls = 0;
@@ -347,13 +360,18 @@ private:
                                                 std::max(c.z - lo.z, hi.z - c.z)};
                     r = std::min(by_balls, length(corner));
                 }
-                areas[8 * i + std::size_t(k)] = total;
                 f.c[0][k] = T(c.x), f.c[1][k] = T(c.y), f.c[2][k] = T(c.z);
                 f.a[0][k] = T(a.x), f.a[1][k] = T(a.y), f.a[2][k] = T(a.z);
-                f.r2[k] = T(r * r * (1 + 1e-6));   // rounded up: the ball holds every vertex after rounding to T
-                f.area[k] = T(total * (1 + 1e-6)); // rounded up, as the error bound needs
+                f.r2[k] = T(r * r * (1 + 1e-6)); // rounded up: the ball holds every vertex after rounding to T
+                err += double(u) * length(Vertex<double>{double(f.a[0][k]), double(f.a[1][k]), double(f.a[2][k])});
+                err *= 1 + 1e-6;
+                areas[8 * i + std::size_t(k)] = total, uppers[8 * i + std::size_t(k)] = upper;
+                errs[8 * i + std::size_t(k)] = err;
+                f.area[k] = T(upper * (1 + 1e-6)); // rounded up, as the error bound needs
+                if (upper > 0) worst = std::max(worst, err / upper);
             }
         }
+        a_error_ = T(worst * (1 + 1e-3));
     }
 
     [[nodiscard]] static Vertex<double> to_double(const Vertex<T>& v) noexcept {
@@ -364,6 +382,7 @@ private:
     Bvh<T> bvh_;
     T beta_;
     std::vector<FarField> far_; // one per node of bvh_'s tree
+    T a_error_ = T(0);          // the largest |stored a − exact Σ area vectors| / area of a child
 };
 
 template <class T>
@@ -395,6 +414,7 @@ WindingNumber<T> Solid<T>::walk(const Vertex<T>& p, T beta) const noexcept {
                 if (far[k] == T(0)) continue;
                 tally.truncation += truncation_bound(f.area[k], std::sqrt(d2[k]), std::sqrt(f.r2[k]), false);
                 tally.dipole_scale += f.area[k] / d2[k];
+                tally.node_scale += f.area[k] / d2[k];
             }
         }
         for (int k = 0; k < 8; ++k) {
@@ -414,8 +434,8 @@ WindingNumber<T> Solid<T>::walk(const Vertex<T>& p, T beta) const noexcept {
         // Stability of Numerical Algorithms, §4.2); each dipole within 16u of its scale.
         const T nu = tally.terms * u;
         const T gamma = nu < T(0.5) ? nu / (T(1) - nu) : inf;
-        const T rounding =
-            T(16) * u * tally.dipole_scale + tally.exact_rounding + gamma * (tally.dipole_scale + tally.exact_abs);
+        const T rounding = T(16) * u * tally.dipole_scale + a_error_ * tally.node_scale + tally.exact_rounding +
+                           gamma * (tally.dipole_scale + tally.exact_abs);
         const T up = T(1) + T(2) * gamma + T(32) * u; // the bound's own rounding, upwards
         const T truncation = tally.truncation / (T(4) * pi) * up;
         const T bound = ((tally.truncation + rounding) / (T(4) * pi) + T(2) * u * std::fabs(value)) * up;
