@@ -46,7 +46,10 @@ std::vector<isin::Vertex<T>> points_of(const isin::Mesh<T>& mesh, double lo, dou
     for (int i = 0; i < n / 2; ++i) points.push_back({T(box(rng)), T(box(rng)), T(box(rng))});
     while (int(points.size()) < n) {
         const isin::Triangle<T> t = mesh.triangle(pick(rng));
-        const isin::Vertex<double> v0{t.v0.x, t.v0.y, t.v0.z}, v1{t.v1.x, t.v1.y, t.v1.z}, v2{t.v2.x, t.v2.y, t.v2.z};
+        const auto to_d = [](const isin::Vertex<T>& v) {
+            return isin::Vertex<double>{double(v.x), double(v.y), double(v.z)};
+        };
+        const isin::Vertex<double> v0 = to_d(t.v0), v1 = to_d(t.v1), v2 = to_d(t.v2);
         double s = unit(rng), r = unit(rng);
         if (s + r > 1) s = 1 - s, r = 1 - r;
         const isin::Vertex<double> n_ = isin::normalize(isin::cross(v1 - v0, v2 - v0));

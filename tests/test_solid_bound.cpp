@@ -42,7 +42,10 @@ std::vector<isin::Vertex<T>> probe_points(const isin::Mesh<T>& mesh, double lo, 
         const isin::Triangle<T> t = mesh.triangle(pick(rng));
         double s = unit(rng), r = unit(rng);
         if (s + r > 1) s = 1 - s, r = 1 - r;
-        const isin::Vertex<double> v0{t.v0.x, t.v0.y, t.v0.z}, v1{t.v1.x, t.v1.y, t.v1.z}, v2{t.v2.x, t.v2.y, t.v2.z};
+        const auto to_d = [](const isin::Vertex<T>& v) {
+            return isin::Vertex<double>{double(v.x), double(v.y), double(v.z)};
+        };
+        const isin::Vertex<double> v0 = to_d(t.v0), v1 = to_d(t.v1), v2 = to_d(t.v2);
         const isin::Vertex<double> on = v0 + s * (v1 - v0) + r * (v2 - v0);
         const isin::Vertex<double> n = isin::normalize(isin::cross(v1 - v0, v2 - v0));
         for (const double h : heights)
