@@ -109,6 +109,11 @@ TEST_CASE_TEMPLATE("Barill 2018 bound: |fast − exact| ≤ error_bound on close
             solids::merged(solids::icosphere<T>(3, {0, 0, 0}, 1.0), solids::icosphere<T>(3, {0.8, 0, 0}, 1.0));
         check_mesh(both, -1.3, 2.1, 3.3, 13);
     }
+    SUBCASE("a closed box 100 × 0.01 × 0.01: sliver triangles") {
+        isin::Mesh<T> box = solids::lattice_cube<T>(1);
+        for (auto& v : box.positions) v = isin::Vertex<T>{v.x * T(100), v.y * T(0.01), v.z * T(0.01)};
+        check_mesh(box, -1.0, 101.0, 100.0, 15);
+    }
     SUBCASE("a lattice cube 10^3 from the origin") {
         isin::Mesh<T> cube = solids::lattice_cube<T>(4);
         for (auto& v : cube.positions) v = v + isin::Vertex<T>{T(1000), T(-1000), T(1000)};
