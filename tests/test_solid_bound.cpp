@@ -85,7 +85,7 @@ std::vector<double> check_bound(const isin::Mesh<T>& mesh, const std::vector<isi
 template <class T>
 void check_mesh(const isin::Mesh<T>& mesh, double lo, double hi, double diag, std::uint64_t seed) {
     const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
-    const auto points = probe_points(mesh, lo, hi, 60, 30, {1e-2 * diag, 1e-3 * diag, 1e-5 * diag}, seed);
+    const auto points = probe_points(mesh, lo, hi, 40, 15, {1e-2 * diag, 1e-3 * diag, 1e-5 * diag}, seed);
     const std::vector<T> betas{T(1), T(1.5), T(2), T(4), T(16), inf, nan};
     const std::vector<double> truncation = check_bound(mesh, points, betas);
     // The truncation bound falls as beta grows, and is 0 for an exact sum.
