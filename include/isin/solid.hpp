@@ -151,11 +151,11 @@ private:
 
     // The far field of a node's 8 children, in lanes: each child's dipole (the sum of its
     // triangles' area vectors, placed at their area-weighted centroid `c`), the squared
-    // radius of a ball round c holding every vertex, and the sum of its triangles' unsigned
-    // areas (rounded up: the error bound's A). An empty slot has a zero dipole and area and an
-    // infinite radius (never far, never entered).
+    // radius of a ball round c holding every vertex, and the spread of its normals,
+    // S = Σ areaᵢ·|nᵢ − m| with m = Σ aᵢ / Σ areaᵢ (rounded up; the error bound's S). An empty
+    // slot has a zero dipole and spread and an infinite radius (never far, never entered).
     struct alignas(64) FarField {
-        T c[3][8], a[3][8], r2[8], area[8];
+        T c[3][8], a[3][8], r2[8], spread[8];
     };
 
     // What a bounded walk adds up, in 4π·w units: the far field's truncation bound, the scale
@@ -167,19 +167,20 @@ private:
           terms = T(0);
     };
 
-    // The most a cluster's dipole can be off its triangles' solid angles, A its unsigned area, r
-    // its ball's radius, d the distance from p to the ball's centre, K(y) = y/|y|³:
-    // A·max_{|x−c|≤r} |K(x−p) − K(c−p)| = A·(1/(d−r)² − 1/d²). One flat triangle about its
-    // centroid (`flat`): A·(1/(d−r)² − 1/d² − 2r/d³), the first-order term being 0. d moved down
-    // and r up by their rounding; +∞ unless d > r.
-    [[nodiscard]] static T truncation_bound(T A, T d, T r, bool flat) noexcept {
-        if (!(A > T(0))) return T(0);
+    // The most a cluster's dipole can be off its triangles' solid angles, K(y) = y/|y|³, r its
+    // ball's radius, d the distance from p to the ball's centre c (the area-weighted centroid),
+    // S the spread of its normals about m, |Σ aᵢ| = |m|·Σ areaᵢ: the part n − m is off by at
+    // most S·max_{|x−c|≤r} |K(x−p) − K(c−p)| = S·(1/(d−r)² − 1/d²), the part m, whose first-order
+    // term is 0 about the centroid, by |Σ aᵢ|·(1/(d−r)² − 1/d² − 2r/d³). d moved down and r up
+    // by their rounding; +∞ unless d > r.
+    [[nodiscard]] static T truncation_bound(T S, T am, T d, T r) noexcept {
+        if (!(S + am > T(0))) return T(0);
         const T dl = d * (T(1) - T(4) * u), ru = r * (T(1) + T(16) * u) + T(4) * u * d;
         if (!(dl > ru)) return inf;
         const T g = dl - ru;
-        const T bound =
-            flat ? A * (ru * ru * (T(3) * dl - T(2) * ru)) / ((dl * dl * dl) * (g * g)) // r²(3d−2r)/(d³(d−r)²)
-                 : A * (ru * (T(2) * dl - ru)) / ((dl * dl) * (g * g));                 // r(2d−r)/(d²(d−r)²)
+        const T first = ru * (T(2) * dl - ru) / ((dl * dl) * (g * g));                   // r(2d−r)/(d²(d−r)²)
+        const T second = ru * ru * (T(3) * dl - T(2) * ru) / ((dl * dl * dl) * (g * g)); // r²(3d−2r)/(d³(d−r)²)
+        const T bound = S * first + am * second;
         return bound == bound ? bound : inf;
     }
 
@@ -261,7 +262,8 @@ private:
                 // The area from rounded edges e, f: off by at most 1.25u·(|e|² + |f|²).
                 const T A =
                     std::sqrt(ax[k] * ax[k] + ay[k] * ay[k] + az[k] * az[k]) * (T(1) + T(4) * u) + T(2) * u * ws[k];
-                tally->truncation += truncation_bound(A, std::sqrt(d2[k]), std::sqrt(r2s[k]), true);
+                tally->truncation +=
+                    truncation_bound(T(0), A, std::sqrt(d2[k]), std::sqrt(r2s[k])); // one normal: S = 0
                 tally->dipole_scale += (T(2) * A + ws[k]) / d2[k]; // A again: the rounded centroid's first-order term
             }
         }
@@ -293,11 +295,21 @@ private:
         const TriangleBlocks<T>& blocks = bvh_.blocks();
         far_.assign(nodes.size(), FarField{});
         std::vector<double> areas(8 * nodes.size()); // Σ triangle areas of each child, 8 a node
-        // For the error bound, each child's: Σ areas rounded up, and how far its stored a may be
-        // from the exact Σ of its area vectors (rounding to T at every level below, double sums).
-        std::vector<double> uppers(8 * nodes.size()), errs(8 * nodes.size());
+        // For the error bound, each child's: Σ areas rounded up, how far its stored a may be from
+        // the exact Σ of its area vectors (rounding to T at every level below, double sums), the
+        // spread of its normals rounded up, and how far its stored c may be from its centroid.
+        std::vector<double> uppers(8 * nodes.size()), errs(8 * nodes.size()), spreads(8 * nodes.size()),
+            cerrs(8 * nodes.size());
         constexpr double ud = std::numeric_limits<double>::epsilon() / 2;
-        double worst = 0; // the largest errs / uppers
+        double worst = 0, worst_c = 0; // the largest errs / uppers and cerrs
+        // The mean normal Σ aᵢ / Σ areaᵢ of child m of node j as stored, and how far it may be off.
+        const auto mean = [&](std::size_t j, int m, Vertex<double>& n) {
+            const std::size_t at = 8 * j + std::size_t(m);
+            const double total = areas[at];
+            if (!(total > 0)) return n = Vertex<double>{0, 0, 0}, 2.0;
+            n = Vertex<double>{double(far_[j].a[0][m]), double(far_[j].a[1][m]), double(far_[j].a[2][m])} / total;
+            return (errs[at] + (uppers[at] - total)) / total;
+        };
         for (std::size_t i = nodes.size(); i-- > 0;) {
             FarField& f = far_[i];
             for (int k = 0; k < 8; ++k) {
@@ -310,10 +322,11 @@ private:
                                         double(nodes[i].hi[2][k])};
                 Vertex<double> c = 0.5 * lo + 0.5 * hi;
                 if (ref == Tree::empty_child) {
-                    areas[8 * i + std::size_t(k)] = uppers[8 * i + std::size_t(k)] = errs[8 * i + std::size_t(k)] = 0;
+                    const std::size_t at = 8 * i + std::size_t(k);
+                    areas[at] = uppers[at] = errs[at] = spreads[at] = cerrs[at] = 0;
                     for (int axis = 0; axis < 3; ++axis) f.c[axis][k] = f.a[axis][k] = T(0);
                     f.r2[k] = std::numeric_limits<T>::infinity();
-                    f.area[k] = T(0);
+                    f.spread[k] = T(0);
                     continue;
                 }
                 if (ref & Tree::leaf_bit) {
@@ -367,11 +380,42 @@ private:
                 err *= 1 + 1e-6;
                 areas[8 * i + std::size_t(k)] = total, uppers[8 * i + std::size_t(k)] = upper;
                 errs[8 * i + std::size_t(k)] = err;
-                f.area[k] = T(upper * (1 + 1e-6)); // rounded up, as the error bound needs
                 if (upper > 0) worst = std::max(worst, err / upper);
+                // The spread about the stored mean normal, plus how far that may be from the exact one.
+                Vertex<double> n{0, 0, 0};
+                const double dn = mean(i, k, n);
+                double spread = 0, cerr = 0;
+                if (ref & Tree::leaf_bit) {
+                    const detail::TriangleBlock<T>& b = blocks[ref & ~Tree::leaf_bit];
+                    for (int m = 0, live = detail::live_lanes(b); m < live; ++m) {
+                        const Triangle<T> t = lane(b, m);
+                        const Vertex<double> v0 = to_double(t.v0);
+                        const Vertex<double> N = 0.5 * cross(to_double(t.v1) - v0, to_double(t.v2) - v0);
+                        spread += length(N - length(N) * n); // areaᵢ·|nᵢ − m|
+                    }
+                    spread += 2 * err; // each N from rounded edges, twice
+                } else {
+                    for (int m = 0; m < 8; ++m) {
+                        const std::size_t at = 8 * std::size_t(ref) + std::size_t(m);
+                        Vertex<double> nm{0, 0, 0};
+                        const double dnm = mean(ref, m, nm);
+                        spread += spreads[at] + uppers[at] * (length(nm - n) + dnm); // |nᵢ − m| ≤ |nᵢ − mₘ| + |mₘ − m|
+                        cerr = std::max(cerr, cerrs[at]);
+                    }
+                }
+                spread = std::min(2 * upper, (spread + upper * dn + 20 * ud * upper) * (1 + 1e-6));
+                // The centroid from weights off by at most upper − total, each centroid within 2r.
+                cerr += (total > 0 ? 2 * (upper - total) * 2 * r / total : 2 * r) + 10 * ud * (length(c) + r) +
+                        double(u) * length(c);
+                cerr = std::min(cerr, r) * (1 + 1e-6); // the centroid lies in the ball
+                spreads[8 * i + std::size_t(k)] = spread, cerrs[8 * i + std::size_t(k)] = cerr;
+                f.spread[k] = T(spread);
+                if (double(f.spread[k]) < spread) f.spread[k] = std::nextafter(f.spread[k], inf);
+                worst_c = std::max(worst_c, cerr);
             }
         }
         a_error_ = T(worst * (1 + 1e-3));
+        c_error_ = T(worst_c * (1 + 1e-3));
     }
 
     [[nodiscard]] static Vertex<double> to_double(const Vertex<T>& v) noexcept {
@@ -383,6 +427,7 @@ private:
     T beta_;
     std::vector<FarField> far_; // one per node of bvh_'s tree
     T a_error_ = T(0);          // the largest |stored a − exact Σ area vectors| / area of a child
+    T c_error_ = T(0);          // the largest distance of a stored c from its exact centroid
 };
 
 template <class T>
@@ -412,9 +457,18 @@ WindingNumber<T> Solid<T>::walk(const Vertex<T>& p, T beta) const noexcept {
             tally.terms += T(8);
             for (int k = 0; k < 8; ++k) {
                 if (far[k] == T(0)) continue;
-                tally.truncation += truncation_bound(f.area[k], std::sqrt(d2[k]), std::sqrt(f.r2[k]), false);
-                tally.dipole_scale += f.area[k] / d2[k];
-                tally.node_scale += f.area[k] / d2[k];
+                // Σ areaᵢ ≤ S + |Σ aᵢ|, and the stored a is within a_error_·Σ areaᵢ of Σ aᵢ.
+                const T S = f.spread[k],
+                        am = std::sqrt(f.a[0][k] * f.a[0][k] + f.a[1][k] * f.a[1][k] + f.a[2][k] * f.a[2][k]);
+                const T A = a_error_ < T(0.5) ? (S + am) * (T(1) + T(4) * u) / (T(1) - a_error_) : inf;
+                const T at = am * (T(1) + T(4) * u) + a_error_ * A, d = std::sqrt(d2[k]);
+                const T dl = d * (T(1) - T(4) * u), r = std::sqrt(f.r2[k]);
+                const T by_spread = truncation_bound(S, at, d, r) +
+                                    at * T(2) * c_error_ / (dl * dl * dl); // c off the centroid: |Σ aᵢ|·‖DK‖·|δc|
+                const T by_area = truncation_bound(A, T(0), d, r); // all of it as n − m: A·(1/(d−r)² − 1/d²)
+                tally.truncation += by_spread < by_area ? by_spread : by_area;
+                tally.dipole_scale += A / d2[k];
+                tally.node_scale += A / d2[k];
             }
         }
         for (int k = 0; k < 8; ++k) {
