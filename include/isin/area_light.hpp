@@ -335,6 +335,7 @@ template <class T>
 /// samples take their value without rays (as POV-Ray's adaptive area lights): exact outside
 /// penumbrae, but an occluder that hides none or all of the corners and probes and not the rest
 /// from p is missed (the probes, spread over the rectangle, make that rarer as samples grow).
+/// Corners below p's horizon do not vote (their rays meet p's own surface; they add nothing).
 /// Where they agree that the whole light is seen and its term is smooth over it
 /// (detail::smooth_order), the mean comes from a 3 × 3 or 4 × 4 Gauss–Legendre rule, not the samples.
 /// `corners`, where given, holds what the shadow rays from p.from to the four corners found
@@ -467,9 +468,16 @@ template <class T, class SceneT>
             shadow_rays += 4u;
             detail::shadow_visibility(scene, rays, 4u, s.opaque, one, seen);
         }
-        const T corner = seen[0];
-        const bool agree =
-            corner == seen[1] && corner == seen[2] && corner == seen[3] && (n < probe_from || probe_agrees(corner));
+        // Corners below p's horizon add nothing (§7: N·L ≤ 0) and their rays meet p's own surface: they do not vote.
+        T corner = T(-1);
+        bool agree = true;
+        for (int c = 0; c < 4; ++c) {
+            if (!(dot(p.N, light_corner(light, c) - p.point) > T(0))) continue;
+            if (corner < T(0)) corner = seen[c];
+            agree = agree && seen[c] == corner;
+        }
+        if (corner < T(0)) return {T(0), T(0), T(0)}; // §7: the whole light below p's horizon
+        agree = agree && (n < probe_from || probe_agrees(corner));
         if (agree && corner == T(0)) return {T(0), T(0), T(0)}; // umbra: every sample shadowed
         if (agree)
             if (const int order = detail::smooth_order(light, p, highlight, min_cos, n))
