@@ -286,3 +286,66 @@ TEST_CASE("render: light_samples outside [1, max_light_samples] throws") {
     opt.light_samples = 1;
     CHECK_NOTHROW((void)isin::render(fs.scene, camera, opt));
 }
+
+namespace {
+// The unshadowed mean over `light` of kd·N·L + ks·(Rf·V)^n at p (the red channel, colours 1), by the
+// midpoint rule on g × g points in double.
+template <class T>
+double unshadowed_mean(const isin::RectLight<T>& light, const isin::LitPoint<T>& p, int g = 512) {
+    double sum = 0;
+    const auto d = [](T x) { return double(x); };
+    const double nv = d(p.N.x) * d(p.V.x) + d(p.N.y) * d(p.V.y) + d(p.N.z) * d(p.V.z);
+    const double R[3] = {2 * nv * d(p.N.x) - d(p.V.x), 2 * nv * d(p.N.y) - d(p.V.y), 2 * nv * d(p.N.z) - d(p.V.z)};
+    for (int j = 0; j < g; ++j)
+        for (int i = 0; i < g; ++i) {
+            const double u = (i + 0.5) / g, v = (j + 0.5) / g;
+            double L[3] = {d(light.corner.x) + u * d(light.edge_u.x) + v * d(light.edge_v.x) - d(p.point.x),
+                           d(light.corner.y) + u * d(light.edge_u.y) + v * d(light.edge_v.y) - d(p.point.y),
+                           d(light.corner.z) + u * d(light.edge_u.z) + v * d(light.edge_v.z) - d(p.point.z)};
+            const double len = std::sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+            for (double& x : L) x /= len;
+            const double nl = L[0] * d(p.N.x) + L[1] * d(p.N.y) + L[2] * d(p.N.z); // §7: N·L
+            const double c = L[0] * R[0] + L[1] * R[1] + L[2] * R[2];              // §7: Rf·V = L·R
+            if (nl > 0) sum += d(p.kd) * nl + (c > 0 ? d(p.ks) * std::pow(c, d(p.shininess)) : 0.0);
+        }
+    return sum / (double(g) * g);
+}
+} // namespace
+
+TEST_CASE_TEMPLATE("rect_light_term: where corners and probes see the whole light, Gauss–Legendre gives its mean", T,
+                   float, double) {
+    const FloorScene<T> fs(false);
+    int smooth = 0, rough = 0;
+    for (int samples : {16, 64, 256})
+        for (int i = 0; i < 24; ++i) {
+            // Floor points under and beside the light, seen from above at varied angles; a highlight of
+            // shininess 20 (or none, or 200: too narrow for the rule where it points at the light).
+            const isin::Vertex<T> P{T(-40) + T(80) * T(i % 8) / T(7), fs.floor_y, T(20) + T(15) * T(i / 8)};
+            isin::Vertex<T> V{T(0.3) * T(i % 3) - T(0.3), T(1), T(0.2) * T(i % 5) - T(0.4)};
+            V = V / isin::length(V);
+            const T ks = i % 4 == 3 ? T(0) : T(0.5), shininess = i % 4 == 2 ? T(200) : T(20);
+            const isin::LitPoint<T> p{
+                P, P + isin::Vertex<T>{0, T(1e-3), 0}, {0, 1, 0}, V, T(0.5), ks, shininess, {1, 1, 1}, {1, 1, 1}};
+            const T min_cos = std::exp2(T(-24) / shininess);
+            const int order = isin::detail::smooth_order(fs.light, p, ks != T(0), min_cos, samples);
+            isin::LightSampling s;
+            s.samples = samples;
+            std::uint64_t rays = 0;
+            const auto adaptive = isin::rect_light_term(fs.scene, fs.light, p, isin::light_seed(P, 0), s, rays);
+            CAPTURE(samples);
+            CAPTURE(i);
+            CHECK(rays == 4u + (samples >= 64 ? std::uint64_t(samples / 4) : 0u)); // corners and probes only
+            if (order == 0) {
+                ++rough;
+                s.adaptive = false; // no quadrature: the samples, as uniform shades them where all are lit
+                rays = 0;
+                CHECK(adaptive.r == isin::rect_light_term(fs.scene, fs.light, p, isin::light_seed(P, 0), s, rays).r);
+                continue;
+            }
+            ++smooth;
+            const double exact = unshadowed_mean(fs.light, p) * double(fs.light.color.r);
+            CHECK(std::abs(double(adaptive.r) - exact) <= 1e-4 * 0.9 + (sizeof(T) == 4 ? 2e-6 : 0.0));
+        }
+    CHECK(smooth > 24); // the rule applies to most points here, and not to all
+    CHECK(rough > 6);
+}
