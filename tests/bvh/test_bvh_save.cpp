@@ -475,6 +475,12 @@ TEST_CASE_TEMPLATE("a sealed Bvh file whose leaf blocks are not their leaves' is
             put32(b, primitives_at + 4 * (std::size_t(first) + 2), primitive(1));
             CHECK(refused(b));
         }
+        for (std::uint32_t j = 1; j + 1 < count; ++j) { // the last live lane as each other one: every distance
+            b = file;
+            put32(b, lane_at(leaf, count - 1), primitive(j));
+            put32(b, primitives_at + 4 * (std::size_t(first) + count - 1), primitive(j));
+            CHECK(refused(b));
+        }
         if (count < 8) { // padding that is not lane 0: its primitive, then each of its reals by one bit
             ++padded;
             b = file;

@@ -594,7 +594,7 @@ private:
                 return set("index out of range: leaf " + std::to_string(l) + " holds primitives [" +
                            std::to_string(leaf.first) + ", +" + std::to_string(leaf.count) + ") of " +
                            std::to_string(primitives));
-            if (!holds(bvh_.blocks_[l], &tree.primitives_[leaf.first], leaf.count))
+            if (!holds(bvh_.blocks_[l], tree.primitives_.data() + leaf.first, leaf.count, primitives - leaf.first))
                 return set("block " + std::to_string(l) + " is not its leaf's (its primitives or padding differ)");
         }
 
@@ -615,8 +615,40 @@ private:
 
         // Whether block b holds the `count` primitives at `own`, pairwise distinct, in its first
         // lanes, and its other lanes repeat lane 0 bit for bit (branch-free: it runs on every block).
-        [[nodiscard]] static bool holds(const Block& b, const std::uint32_t* own, std::uint32_t count) noexcept {
+        // `own` has `room` ≥ count primitives readable. In lane vectors: GCC keeps the loops over
+        // `count` lanes scalar, a lane at a time.
+        [[nodiscard]] static bool holds(const Block& b, const std::uint32_t* own, std::uint32_t count,
+                                        [[maybe_unused]] std::size_t room) noexcept {
             using Bits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
+#if ISIN_VECTOR_EXTENSIONS
+            using U = L8<std::uint32_t>;
+            using M = L8<std::int32_t>;                                                       // a lane mask of U
+            using WideM = L8<std::conditional_t<sizeof(T) == 4, std::int32_t, std::int64_t>>; // of Bits
+            const M index = {0, 1, 2, 3, 4, 5, 6, 7};
+            const M live = index < std::int32_t(count);
+            U p, o = {};
+            std::memcpy(&p, b.primitive, sizeof p);
+            if (room >= 8)
+                std::memcpy(&o, own, sizeof o);
+            else
+                std::memcpy(&o, own, count * sizeof *own);
+            M bad = ((p != o) & live) | ((p != p[0]) & ~live); // its leaf's primitives, then lane 0's
+            // Pairwise distinct: each lane against the lanes 1…4 after it (mod 8) covers every pair.
+            U q;
+            M l;
+            rotate<1>(p, q), rotate<1>(live, l), bad |= (p == q) & live & l;
+            rotate<2>(p, q), rotate<2>(live, l), bad |= (p == q) & live & l;
+            rotate<3>(p, q), rotate<3>(live, l), bad |= (p == q) & live & l;
+            rotate<4>(p, q), rotate<4>(live, l), bad |= (p == q) & live & l;
+            const WideM pad = __builtin_convertvector(~live, WideM);
+            WideM wrong = {};
+            for (int r = 0; r < 9; ++r) { // the padding repeats lane 0 bit for bit
+                L8<Bits> x;
+                std::memcpy(&x, b.v[r / 3][r % 3], sizeof x);
+                wrong |= (x != x[0]) & pad;
+            }
+            return !any_lane(bad | __builtin_convertvector(wrong, M));
+#else
             // Masks of lanes: those before the padding, and those whose primitive is lane 0's.
             const unsigned live = (1u << count) - 1u;
             unsigned first = 0, wrong = 0;
@@ -633,7 +665,31 @@ private:
             for (std::uint32_t k = count; k < 8; ++k)
                 for (int r = 0; r < 9; ++r) wrong |= unsigned(bits(r, k) != bits(r, 0));
             return wrong == 0;
+#endif
         }
+#if ISIN_VECTOR_EXTENSIONS
+        // out = v with lane k taken from lane (k + r) mod 8 (by reference: vectors never cross a
+        // function boundary by value, whose ABI depends on the target).
+        template <int r, class V>
+        static void rotate(const V& v, V& out) noexcept {
+#if defined(__clang__)
+            out = __builtin_shufflevector(v, v, r % 8, (r + 1) % 8, (r + 2) % 8, (r + 3) % 8, (r + 4) % 8, (r + 5) % 8,
+                                          (r + 6) % 8, (r + 7) % 8);
+#else
+            using I = L8<std::int32_t>;
+            out = __builtin_shuffle(
+                v, I{r % 8, (r + 1) % 8, (r + 2) % 8, (r + 3) % 8, (r + 4) % 8, (r + 5) % 8, (r + 6) % 8, (r + 7) % 8});
+#endif
+        }
+        // Whether any lane of a mask vector is set.
+        template <class V>
+        [[nodiscard]] static bool any_lane(const V& v) noexcept {
+            std::uint64_t w[sizeof(V) / 8], all = 0;
+            std::memcpy(w, &v, sizeof w);
+            for (const std::uint64_t x : w) all |= x;
+            return all != 0;
+        }
+#endif
 
         const Bvh<T>& bvh_;
         std::vector<std::uint8_t> level_, reached_;
