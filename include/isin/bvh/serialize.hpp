@@ -3,10 +3,10 @@
 /// Bvh<T>::save, Bvh<T>::load and Bvh<T>::load_from_memory. The file holds what traversal reads
 /// (nodes, leaves, primitive order, leaf blocks) as little-endian arrays in the one layout every
 /// code path reads (8-wide nodes, 8-lane blocks), after a header and its own checksum, and ends
-/// with an XXH64 checksum of every byte before it. Loading trusts nothing: sizes are checked
-/// against the file's length before anything is allocated, and the checksum and every index,
-/// count and reference of the tree (each checked in bounds as it is read) before the Bvh is
-/// returned.
+/// with a checksum (four XXH64 streams, Xxh64x4) of every byte before it. Loading trusts
+/// nothing: sizes are checked against the file's length before anything is allocated, and the
+/// checksum and every index, count and reference of the tree (each checked in bounds as it is
+/// read) before the Bvh is returned.
 ///
 ///     isin::Bvh<float> bvh{mesh};
 ///     bvh.save("model.bvh");                                   // once
