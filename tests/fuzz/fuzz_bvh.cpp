@@ -41,7 +41,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::vector<std::uint8_t> sealed(data, data + size);
         put64(&sealed[72], size);
         put64(&sealed[80], isin::detail::Xxh64::of(sealed.data(), 80));
-        put64(&sealed[size - 8], isin::detail::Xxh64::of(sealed.data(), size - 8));
+        put64(&sealed[size - 8], isin::detail::Xxh64x4::of(sealed.data(), size - 8));
         load_and_trace<float>(sealed.data(), size);
         load_and_trace<double>(sealed.data(), size);
     }

@@ -3,10 +3,10 @@
 /// Bvh<T>::save, Bvh<T>::load and Bvh<T>::load_from_memory. The file holds what traversal reads
 /// (nodes, leaves, primitive order, leaf blocks) as little-endian arrays in the one layout every
 /// code path reads (8-wide nodes, 8-lane blocks), after a header and its own checksum, and ends
-/// with an XXH64 checksum of every byte before it. Loading trusts nothing: sizes are checked
-/// against the file's length before anything is allocated, and the checksum and every index,
-/// count and reference of the tree (each checked in bounds as it is read) before the Bvh is
-/// returned.
+/// with a checksum (four XXH64 streams, Xxh64x4) of every byte before it. Loading trusts
+/// nothing: sizes are checked against the file's length before anything is allocated, and the
+/// checksum and every index, count and reference of the tree (each checked in bounds as it is
+/// read) before the Bvh is returned.
 ///
 ///     isin::Bvh<float> bvh{mesh};
 ///     bvh.save("model.bvh");                                   // once
@@ -24,6 +24,7 @@
 
 #include "../io/file.hpp"
 #include "../read_limits.hpp"
+#include "../simd/lanes.hpp"
 #include "triangle_bvh.hpp"
 
 namespace isin {
@@ -115,7 +116,16 @@ public:
         return h.digest();
     }
 
+    /// A checksum (seed 0) whose lanes are `v` after `bytes` bytes, a multiple of 32, were added.
+    [[nodiscard]] static Xxh64 resumed(const std::uint64_t* v, std::uint64_t bytes) noexcept {
+        Xxh64 h;
+        for (int i = 0; i < 4; ++i) h.v_[i] = v[i];
+        h.total_ = bytes;
+        return h;
+    }
+
 private:
+    friend class Xxh64x4;
     static constexpr std::uint64_t p1 = 0x9E3779B185EBCA87u, p2 = 0xC2B2AE3D27D4EB4Fu, p3 = 0x165667B19E3779F9u,
                                    p4 = 0x85EBCA77C2B2AE63u, p5 = 0x27D4EB2F165667C5u;
     static std::uint64_t rotl(std::uint64_t x, int r) noexcept { return (x << r) | (x >> (64 - r)); }
@@ -145,6 +155,110 @@ private:
     std::uint64_t seed_;
     std::uint64_t total_ = 0;
     unsigned char buffer_[32] = {};
+    std::size_t buffered_ = 0;
+};
+
+/// The checksum of Bvh files from version 2: four XXH64 streams over interleaved stripes. The bytes
+/// are cut into stripes of 32 (the last may be shorter); stream j (0…3) is XXH64 (seed 0) of
+/// stripes j, j + 4, j + 8, …; the checksum is XXH64 (seed 0) of the four streams' checksums as
+/// 32 little-endian bytes. One XXH64 stream waits on its chain of multiplies; four independent
+/// ones keep a core's multipliers busy (16 lanes), with the same result on every code path.
+class Xxh64x4 {
+public:
+    Xxh64x4() noexcept {
+        for (int j = 0; j < 4; ++j) {
+            const Xxh64 start;
+            for (int i = 0; i < 4; ++i) v_[4 * j + i] = start.v_[i];
+        }
+    }
+
+    /// Adds n bytes at p.
+    void update(const unsigned char* p, std::size_t n) noexcept {
+        total_ += n;
+        if (buffered_ + n < 128) {
+            if (n) std::memcpy(buffer_ + buffered_, p, n);
+            buffered_ += n;
+            return;
+        }
+        if (buffered_) {
+            const std::size_t fill = 128 - buffered_;
+            std::memcpy(buffer_ + buffered_, p, fill);
+            rows(v_, buffer_, 1);
+            p += fill, n -= fill, buffered_ = 0;
+        }
+        rows(v_, p, n / 128);
+        p += n / 128 * 128, n %= 128;
+        if (n) std::memcpy(buffer_, p, n);
+        buffered_ = n;
+    }
+
+    /// Adds `count` records of `bytes` each at p, calling each(k) once the whole 128-byte rows of
+    /// record k are added, so that the caller's work on a record runs beside the multiplies.
+    template <class Each>
+    void update_each(const unsigned char* p, std::size_t count, std::size_t bytes, Each&& each) {
+        const std::size_t n = count * bytes, head = buffered_ ? std::min<std::size_t>(128 - buffered_, n) : 0;
+        update(p, head); // completes the buffer, or takes all
+        std::size_t at = head;
+        for (std::size_t k = 0; k < count; ++k) {
+            const std::size_t end = (k + 1) * bytes, full = end >= at + 128 ? (end - at) / 128 : 0;
+            rows(v_, p + at, full);
+            at += 128 * full;
+            each(k);
+        }
+        total_ += at - head;
+        update(p + at, n - at); // less than a row
+    }
+
+    /// The checksum of everything added so far.
+    [[nodiscard]] std::uint64_t digest() const noexcept {
+        const std::uint64_t rows = total_ / 128;
+        unsigned char streams[32];
+        for (std::size_t j = 0; j < 4; ++j) {
+            Xxh64 h = Xxh64::resumed(v_ + 4 * j, 32 * rows);
+            const std::size_t from = std::min<std::size_t>(buffered_, 32 * j);
+            h.update(buffer_ + from, std::min<std::size_t>(buffered_, 32 * j + 32) - from);
+            const std::uint64_t d = h.digest();
+            for (std::size_t i = 0; i < 8; ++i) streams[8 * j + i] = static_cast<unsigned char>(d >> (8 * i));
+        }
+        return Xxh64::of(streams, 32);
+    }
+
+    /// The checksum of n bytes at p.
+    [[nodiscard]] static std::uint64_t of(const unsigned char* p, std::size_t n) noexcept {
+        Xxh64x4 h;
+        h.update(p, n);
+        return h.digest();
+    }
+
+private:
+    // `count` rows of 128 bytes: a stripe for each stream, lane i of the 16 taking bytes 8i…8i + 7
+    // of a row. GCC keeps 16 scalar lanes in general registers and spills them between records, so
+    // with AVX-512 (vpmullq, vprolq) the lanes are four vectors; without it, 64-bit lane multiplies
+    // are emulated and slower than scalar ones.
+    static void rows(std::uint64_t* v, const unsigned char* p, std::size_t count) noexcept {
+#if ISIN_VECTOR_EXTENSIONS && defined(__AVX512DQ__) && defined(__AVX512VL__)
+        if (Xxh64::little_endian()) {
+            using V = L4<std::uint64_t>;
+            V a[4];
+            std::memcpy(a, v, sizeof a);
+            for (; count; --count, p += 128)
+                for (int j = 0; j < 4; ++j) {
+                    V x;
+                    std::memcpy(&x, p + 32 * j, sizeof x);
+                    a[j] += x * Xxh64::p2; // XXH64: acc = rotl(acc + lane·P2, 31)·P1
+                    a[j] = ((a[j] << 31) | (a[j] >> 33)) * Xxh64::p1;
+                }
+            std::memcpy(v, a, sizeof a);
+            return;
+        }
+#endif
+        for (; count; --count, p += 128)
+            for (int i = 0; i < 16; ++i) v[i] = Xxh64::round(v[i], Xxh64::read64(p + 8 * i));
+    }
+
+    std::uint64_t v_[16];
+    std::uint64_t total_ = 0;
+    unsigned char buffer_[128] = {};
     std::size_t buffered_ = 0;
 };
 
@@ -208,7 +322,7 @@ public:
     using Block = typename TriangleBlocks<T>::Block;
 
     static constexpr char magic[8] = {'i', 's', 'i', 'n', '-', 'b', 'v', 'h'};
-    static constexpr std::uint32_t version = 1;
+    static constexpr std::uint32_t version = 2;
     static constexpr std::size_t header_bytes = 88, checksum_bytes = 8;
     // A record holds a struct's fields in order, without the padding alignas adds at its end.
     static constexpr std::size_t node_bytes = 48 * sizeof(T) + 32, leaf_bytes = 8, primitive_bytes = 4,
@@ -242,7 +356,7 @@ public:
         p = put_array(p, tree.leaves_.data(), leaves * leaf_bytes);
         p = put_array(p, tree.primitives_.data(), primitives * primitive_bytes);
         for (std::size_t k = 0; k < leaves; ++k) p = put_record(p, &bvh.blocks_[k], block_bytes, 72);
-        put64(p, Xxh64::of(out.data(), out.size() - checksum_bytes));
+        put64(p, Xxh64x4::of(out.data(), out.size() - checksum_bytes));
         return out;
     }
 
@@ -268,8 +382,8 @@ public:
                        std::to_string(header_bytes));
         if (get64(data + 80) != Xxh64::of(data, 80)) throw fail("checksum mismatch in its header (a damaged file)");
         if (get32(data + 12) != header_bytes)
-            throw fail("has a header of " + std::to_string(get32(data + 12)) + " bytes; version 1 has " +
-                       std::to_string(header_bytes));
+            throw fail("has a header of " + std::to_string(get32(data + 12)) + " bytes; version " +
+                       std::to_string(version) + " has " + std::to_string(header_bytes));
         if (get32(data + 16) != sizeof(T))
             throw fail("wrong precision: it holds a Bvh<" + precision_name(get32(data + 16)) + ">, not a Bvh<" +
                        precision_name(sizeof(T)) + ">");
@@ -327,7 +441,7 @@ public:
         Bvh<T> bvh;
         Tree& tree = bvh.tree_;
         auto& blocks = bvh.blocks_.blocks_;
-        Xxh64 sum;
+        Xxh64x4 sum;
         sum.update(data, header_bytes);
         Checker checker(bvh, std::size_t(nodes), std::size_t(leaves), depth);
         const bool swap = !host_little_endian();
@@ -480,7 +594,7 @@ private:
                 return set("index out of range: leaf " + std::to_string(l) + " holds primitives [" +
                            std::to_string(leaf.first) + ", +" + std::to_string(leaf.count) + ") of " +
                            std::to_string(primitives));
-            if (!holds(bvh_.blocks_[l], &tree.primitives_[leaf.first], leaf.count))
+            if (!holds(bvh_.blocks_[l], tree.primitives_.data() + leaf.first, leaf.count, primitives - leaf.first))
                 return set("block " + std::to_string(l) + " is not its leaf's (its primitives or padding differ)");
         }
 
@@ -501,8 +615,40 @@ private:
 
         // Whether block b holds the `count` primitives at `own`, pairwise distinct, in its first
         // lanes, and its other lanes repeat lane 0 bit for bit (branch-free: it runs on every block).
-        [[nodiscard]] static bool holds(const Block& b, const std::uint32_t* own, std::uint32_t count) noexcept {
+        // `own` has `room` ≥ count primitives readable. In lane vectors: GCC keeps the loops over
+        // `count` lanes scalar, a lane at a time.
+        [[nodiscard]] static bool holds(const Block& b, const std::uint32_t* own, std::uint32_t count,
+                                        [[maybe_unused]] std::size_t room) noexcept {
             using Bits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
+#if ISIN_VECTOR_EXTENSIONS
+            using U = L8<std::uint32_t>;
+            using M = L8<std::int32_t>;                                                       // a lane mask of U
+            using WideM = L8<std::conditional_t<sizeof(T) == 4, std::int32_t, std::int64_t>>; // of Bits
+            const M index = {0, 1, 2, 3, 4, 5, 6, 7};
+            const M live = index < std::int32_t(count);
+            U p, o = {};
+            std::memcpy(&p, b.primitive, sizeof p);
+            if (room >= 8)
+                std::memcpy(&o, own, sizeof o);
+            else
+                std::memcpy(&o, own, count * sizeof *own);
+            M bad = ((p != o) & live) | ((p != p[0]) & ~live); // its leaf's primitives, then lane 0's
+            // Pairwise distinct: each lane against the lanes 1…4 after it (mod 8) covers every pair.
+            U q;
+            M l;
+            rotate<1>(p, q), rotate<1>(live, l), bad |= (p == q) & live & l;
+            rotate<2>(p, q), rotate<2>(live, l), bad |= (p == q) & live & l;
+            rotate<3>(p, q), rotate<3>(live, l), bad |= (p == q) & live & l;
+            rotate<4>(p, q), rotate<4>(live, l), bad |= (p == q) & live & l;
+            const WideM pad = __builtin_convertvector(~live, WideM);
+            WideM wrong = {};
+            for (int r = 0; r < 9; ++r) { // the padding repeats lane 0 bit for bit
+                L8<Bits> x;
+                std::memcpy(&x, b.v[r / 3][r % 3], sizeof x);
+                wrong |= (x != x[0]) & pad;
+            }
+            return !any_lane(bad | __builtin_convertvector(wrong, M));
+#else
             // Masks of lanes: those before the padding, and those whose primitive is lane 0's.
             const unsigned live = (1u << count) - 1u;
             unsigned first = 0, wrong = 0;
@@ -519,7 +665,31 @@ private:
             for (std::uint32_t k = count; k < 8; ++k)
                 for (int r = 0; r < 9; ++r) wrong |= unsigned(bits(r, k) != bits(r, 0));
             return wrong == 0;
+#endif
         }
+#if ISIN_VECTOR_EXTENSIONS
+        // out = v with lane k taken from lane (k + r) mod 8 (by reference: vectors never cross a
+        // function boundary by value, whose ABI depends on the target).
+        template <int r, class V>
+        static void rotate(const V& v, V& out) noexcept {
+#if defined(__clang__)
+            out = __builtin_shufflevector(v, v, r % 8, (r + 1) % 8, (r + 2) % 8, (r + 3) % 8, (r + 4) % 8, (r + 5) % 8,
+                                          (r + 6) % 8, (r + 7) % 8);
+#else
+            using I = L8<std::int32_t>;
+            out = __builtin_shuffle(
+                v, I{r % 8, (r + 1) % 8, (r + 2) % 8, (r + 3) % 8, (r + 4) % 8, (r + 5) % 8, (r + 6) % 8, (r + 7) % 8});
+#endif
+        }
+        // Whether any lane of a mask vector is set.
+        template <class V>
+        [[nodiscard]] static bool any_lane(const V& v) noexcept {
+            std::uint64_t w[sizeof(V) / 8], all = 0;
+            std::memcpy(w, &v, sizeof w);
+            for (const std::uint64_t x : w) all |= x;
+            return all != 0;
+        }
+#endif
 
         const Bvh<T>& bvh_;
         std::vector<std::uint8_t> level_, reached_;
