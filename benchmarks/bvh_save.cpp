@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -142,7 +143,7 @@ void measure(const std::string& name, const std::vector<isin::Triangle<T>>& tris
 
 } // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
     int runs = 7;
     bool doubles = false;
     std::string dir = std::filesystem::temp_directory_path().string();
@@ -155,7 +156,15 @@ int main(int argc, char** argv) {
             dir = argv[++i];
         else if (a == "--double")
             doubles = true;
-        else
+        else if (a == "--help" || a == "-h") {
+            std::printf("usage: bvh_save [--runs N] [--dir DIR] [--double] [MESH.ply|MESH.obj ...]\n"
+                        "  save and load each mesh's Bvh (and a generated 1.3M-triangle icosphere) in DIR,\n"
+                        "  and print the load's and save's CPU time against the build's\n");
+            return 0;
+        } else if (!a.empty() && a[0] == '-') {
+            std::fprintf(stderr, "bvh_save: unknown option %s (--help lists them)\n", a.c_str());
+            return 2;
+        } else
             paths.push_back(a);
     }
     std::printf("isin Bvh save/load against build, medians of %d runs, code paths: slabs %s, leaf %s\n", runs,
@@ -167,4 +176,7 @@ int main(int argc, char** argv) {
     }
     measure<float>("icosphere-1.3M", meshes::make<float>("icosphere-1.3M"), runs, dir);
     if (doubles) measure<double>("icosphere-1.3M", meshes::make<double>("icosphere-1.3M"), runs, dir);
+} catch (const std::exception& e) {
+    std::fprintf(stderr, "bvh_save: %s\n", e.what());
+    return 1;
 }
