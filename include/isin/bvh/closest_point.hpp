@@ -2,7 +2,7 @@
 /// isin — the closest point of a Bvh's triangles to a point: a walk of the tree nearest box
 /// first, inside a sphere around the point that shrinks to each closer triangle found (boxes
 /// farther than the sphere are skipped), each leaf's triangles by Ericson's regions
-/// (point_hit.hpp). Bvh::closest_point calls it.
+/// (point_hit.hpp). Bvh::closest_point calls it, and Scene::closest_point for each placed mesh.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -115,20 +115,11 @@ ISIN_DETAIL_INLINE void triangle_lower_bounds(const TriangleBlock<T>& b, const T
 #endif
 }
 
-/// closest_point (below) with the sphere's squared radius starting at `start2` (max_distance²,
-/// or less: a bound known to hold the answer).
-template <class T>
-[[nodiscard]] PointHit<T> closest_point_within(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks,
-                                               const Vertex<T>& p, T start2) noexcept {
-    PointHit<T> best;
+/// Walks `tree` from the point q nearest box first: calls leaf(index) for each leaf whose box
+/// lies within squared distance `reach2`, which the leaf may lower (boxes beyond it are skipped).
+template <class T, class Leaf>
+ISIN_DETAIL_INLINE void walk_nearest(const BvhTree<T>& tree, const T (&q)[3], const T& reach2, Leaf&& leaf) noexcept {
     using Tree = BvhTree<T>;
-    const T q[3] = {p.x, p.y, p.z};
-    T best2 = start2; // the sphere's squared radius; +∞ for no bound
-    TrianglePoint<T> found{};
-    std::uint32_t found_primitive = PointHit<T>::none;
-    std::uint32_t found_leaf = 0;
-    int found_lane = -1;
-
     struct Entry {
         T d2;
         std::uint32_t ref;
@@ -138,7 +129,7 @@ template <class T>
     stack[top++] = {T(0), 0};
     while (top > 0) {
         const Entry e = stack[--top];
-        if (e.d2 > best2) continue; // the sphere shrank below this box since it was pushed
+        if (e.d2 > reach2) continue; // the sphere shrank below this box since it was pushed
         if (!(e.ref & Tree::leaf_bit)) {
             const typename Tree::Node& n = tree.nodes()[e.ref];
             T d2[8];
@@ -147,40 +138,105 @@ template <class T>
             // walked first and shrinks the sphere; empty slots (+∞) and NaN fail the test.
             const int base = top;
             for (int k = 0; k < 8; ++k) {
-                if (!(d2[k] <= best2)) continue;
+                if (!(d2[k] <= reach2)) continue;
                 int j = top++;
                 for (; j > base && stack[j - 1].d2 < d2[k]; --j) stack[j] = stack[j - 1];
                 stack[j] = {d2[k], n.child[k]};
             }
             continue;
         }
-        const std::uint32_t leaf = e.ref & ~Tree::leaf_bit;
-        const typename TriangleBlocks<T>::Block& b = blocks[leaf];
-        T box2[8]; // lower bounds of the 8 triangles' squared distances: the exact test only where they are in reach
-        triangle_lower_bounds(b, q, box2);
-        for (int k = 0, live = live_lanes(b); k < live; ++k) {
-            if (!(box2[k] <= best2)) continue;
-            const Vertex<T> v0{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]};
-            const Vertex<T> v1{b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]};
-            const Vertex<T> v2{b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]};
-            const TrianglePoint<T> t = closest_on_triangle(p, v0, v1, v2);
-            const T d2 = dot(t.gap, t.gap);
-            if (d2 < best2 || (d2 == best2 && b.primitive[k] < found_primitive)) {
-                best2 = d2, found = t, found_primitive = b.primitive[k], found_leaf = leaf, found_lane = k;
-            }
-        }
+        leaf(e.ref & ~Tree::leaf_bit);
     }
-    if (found_lane < 0) return best; // nothing within the start radius
-    const typename TriangleBlocks<T>::Block& b = blocks[found_leaf];
-    const int k = found_lane;
-    const Triangle<T> tri{{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]},
-                          {b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]},
-                          {b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]}};
-    best.point = triangle_point(tri, found.u, found.v);
-    best.distance = std::sqrt(best2);
-    best.primitive = found_primitive;
-    best.u = found.u, best.v = found.v;
+}
+
+/// Where a walk's triangles stand: in the tree's own space (the Bvh's query).
+template <class T>
+struct SameSpace {
+    static constexpr bool moved = false;
+    [[nodiscard]] Vertex<T> operator()(const Vertex<T>& v) const noexcept { return v; }
+};
+
+/// The triangle closest so far in a walk: its squared distance `best2` (the sphere's squared
+/// radius, which starts at a bound), where it is on its triangle, and its block and lane.
+template <class T>
+struct NearestTriangle {
+    T best2;
+    TrianglePoint<T> found{};
+    std::uint32_t primitive = PointHit<T>::none, leaf = 0;
+    int lane = -1;
+};
+
+/// Tests leaf `leaf`'s triangles, placed by `map` (SameSpace, or a map with `scale2`: its
+/// squared distances are at least scale2 times the tree space's), against p, lowering n.best2;
+/// `q` is p in the tree's space, where the lower bounds are taken.
+template <class T, class Map>
+ISIN_DETAIL_INLINE void nearest_in_leaf(const TriangleBlocks<T>& blocks, std::uint32_t leaf, const T (&q)[3],
+                                        const Vertex<T>& p, const Map& map, NearestTriangle<T>& n) noexcept {
+    const typename TriangleBlocks<T>::Block& b = blocks[leaf];
+    T box2[8]; // lower bounds of the 8 triangles' squared distances: the exact test only where they are in reach
+    triangle_lower_bounds(b, q, box2);
+    for (int k = 0, live = live_lanes(b); k < live; ++k) {
+        if constexpr (Map::moved) {
+            if (!(box2[k] * map.scale2 <= n.best2)) continue;
+        } else if (!(box2[k] <= n.best2)) {
+            continue;
+        }
+        const Vertex<T> v0 = map(Vertex<T>{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]});
+        const Vertex<T> v1 = map(Vertex<T>{b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]});
+        const Vertex<T> v2 = map(Vertex<T>{b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]});
+        const TrianglePoint<T> t = closest_on_triangle(p, v0, v1, v2);
+        const T d2 = dot(t.gap, t.gap);
+        if (d2 < n.best2 || (d2 == n.best2 && b.primitive[k] < n.primitive))
+            n.best2 = d2, n.found = t, n.primitive = b.primitive[k], n.leaf = leaf, n.lane = k;
+    }
+}
+
+/// Walks the tree for the triangle closest to p within √n.best2 (lowered as closer ones are
+/// found), its triangles placed by `map`; `q_tree` is p in the tree's space.
+template <class T, class Map>
+ISIN_DETAIL_INLINE void nearest_triangle(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks,
+                                         const Vertex<T>& q_tree, const Vertex<T>& p, const Map& map,
+                                         NearestTriangle<T>& n) noexcept {
+    const T q[3] = {q_tree.x, q_tree.y, q_tree.z};
+    if constexpr (Map::moved) {
+        T reach2 = n.best2 / map.scale2; // the tree space's sphere
+        walk_nearest(tree, q, reach2, [&](std::uint32_t leaf) ISIN_DETAIL_LAMBDA_INLINE {
+            nearest_in_leaf(blocks, leaf, q, p, map, n);
+            reach2 = n.best2 / map.scale2;
+        });
+    } else {
+        walk_nearest(tree, q, n.best2, [&](std::uint32_t leaf) ISIN_DETAIL_LAMBDA_INLINE {
+            nearest_in_leaf(blocks, leaf, q, p, map, n);
+        });
+    }
+}
+
+/// The PointHit a walk found (a miss when nothing): the point on the triangle placed by `map`.
+template <class T, class Map>
+[[nodiscard]] PointHit<T> point_hit_of(const TriangleBlocks<T>& blocks, const Map& map,
+                                       const NearestTriangle<T>& n) noexcept {
+    PointHit<T> best;
+    if (n.lane < 0) return best; // nothing within the start radius
+    const typename TriangleBlocks<T>::Block& b = blocks[n.leaf];
+    const int k = n.lane;
+    const Triangle<T> tri{map(Vertex<T>{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]}),
+                          map(Vertex<T>{b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]}),
+                          map(Vertex<T>{b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]})};
+    best.point = triangle_point(tri, n.found.u, n.found.v);
+    best.distance = std::sqrt(n.best2);
+    best.primitive = n.primitive;
+    best.u = n.found.u, best.v = n.found.v;
     return best;
+}
+
+/// closest_point (below) with the sphere's squared radius starting at `start2` (max_distance²,
+/// or less: a bound known to hold the answer).
+template <class T>
+[[nodiscard]] PointHit<T> closest_point_within(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks,
+                                               const Vertex<T>& p, T start2) noexcept {
+    NearestTriangle<T> n{start2};
+    nearest_triangle(tree, blocks, p, p, SameSpace<T>{}, n);
+    return point_hit_of(blocks, SameSpace<T>{}, n);
 }
 
 /// The closest point of the tree's triangles to p within max_distance (PointHit; a miss when
