@@ -115,10 +115,11 @@ ISIN_DETAIL_INLINE void triangle_lower_bounds(const TriangleBlock<T>& b, const T
 #endif
 }
 
-/// Walks `tree` from the point q nearest box first: calls leaf(index) for each leaf whose box
-/// lies within squared distance `reach2`, which the leaf may lower (boxes beyond it are skipped).
-template <class T, class Leaf>
-ISIN_DETAIL_INLINE void walk_nearest(const BvhTree<T>& tree, const T (&q)[3], const T& reach2, Leaf&& leaf) noexcept {
+/// Walks `tree` nearest child first: bound(node, d2) gives lower bounds of the squared distances
+/// to a node's 8 children (NaN or +∞ for an empty slot); calls leaf(index) for each leaf within
+/// `reach2`, which the leaf may lower (children beyond it are then skipped).
+template <class T, class Bound, class Leaf>
+ISIN_DETAIL_INLINE void walk_nearest_by(const BvhTree<T>& tree, Bound&& bound, const T& reach2, Leaf&& leaf) noexcept {
     using Tree = BvhTree<T>;
     struct Entry {
         T d2;
@@ -133,7 +134,7 @@ ISIN_DETAIL_INLINE void walk_nearest(const BvhTree<T>& tree, const T (&q)[3], co
         if (!(e.ref & Tree::leaf_bit)) {
             const typename Tree::Node& n = tree.nodes()[e.ref];
             T d2[8];
-            box_distances<T>(n.lo, n.hi, q, d2);
+            bound(n, d2);
             // Pushed farthest first (insertion into the stack's top), so the nearest box is
             // walked first and shrinks the sphere; empty slots (+∞) and NaN fail the test.
             const int base = top;
@@ -149,11 +150,25 @@ ISIN_DETAIL_INLINE void walk_nearest(const BvhTree<T>& tree, const T (&q)[3], co
     }
 }
 
-/// Where a walk's triangles stand: in the tree's own space (the Bvh's query).
+/// walk_nearest_by with the distances from the point q to the children's boxes.
+template <class T, class Leaf>
+ISIN_DETAIL_INLINE void walk_nearest(const BvhTree<T>& tree, const T (&q)[3], const T& reach2, Leaf&& leaf) noexcept {
+    walk_nearest_by(
+        tree,
+        [&q](const typename BvhTree<T>::Node& n, T(&d2)[8])
+            ISIN_DETAIL_LAMBDA_INLINE { box_distances<T>(n.lo, n.hi, q, d2); },
+        reach2, static_cast<Leaf&&>(leaf));
+}
+
+/// Where a walk's triangles stand: in the tree's own space (the Bvh's query). A map that moves
+/// them (`moved`) also gives node_bounds(node, q, d2) from the tree-space point q, and
+/// block(b, scratch), the block's triangles moved (into scratch).
 template <class T>
 struct SameSpace {
     static constexpr bool moved = false;
-    [[nodiscard]] Vertex<T> operator()(const Vertex<T>& v) const noexcept { return v; }
+    [[nodiscard]] const TriangleBlock<T>& block(const TriangleBlock<T>& b, TriangleBlock<T>&) const noexcept {
+        return b;
+    }
 };
 
 /// The triangle closest so far in a walk: its squared distance `best2` (the sphere's squared
@@ -166,24 +181,18 @@ struct NearestTriangle {
     int lane = -1;
 };
 
-/// Tests leaf `leaf`'s triangles, placed by `map` (SameSpace, or a map with `scale2`: its
-/// squared distances are at least scale2 times the tree space's), against p, lowering n.best2;
-/// `q` is p in the tree's space, where the lower bounds are taken.
-template <class T, class Map>
-ISIN_DETAIL_INLINE void nearest_in_leaf(const TriangleBlocks<T>& blocks, std::uint32_t leaf, const T (&q)[3],
-                                        const Vertex<T>& p, const Map& map, NearestTriangle<T>& n) noexcept {
-    const typename TriangleBlocks<T>::Block& b = blocks[leaf];
+/// Tests block `b` (leaf `leaf`'s triangles) against p (`q`: the same, as an array), lowering
+/// n.best2.
+template <class T>
+ISIN_DETAIL_INLINE void nearest_in_leaf(const TriangleBlock<T>& b, std::uint32_t leaf, const T (&q)[3],
+                                        const Vertex<T>& p, NearestTriangle<T>& n) noexcept {
     T box2[8]; // lower bounds of the 8 triangles' squared distances: the exact test only where they are in reach
     triangle_lower_bounds(b, q, box2);
     for (int k = 0, live = live_lanes(b); k < live; ++k) {
-        if constexpr (Map::moved) {
-            if (!(box2[k] * map.scale2 <= n.best2)) continue;
-        } else if (!(box2[k] <= n.best2)) {
-            continue;
-        }
-        const Vertex<T> v0 = map(Vertex<T>{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]});
-        const Vertex<T> v1 = map(Vertex<T>{b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]});
-        const Vertex<T> v2 = map(Vertex<T>{b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]});
+        if (!(box2[k] <= n.best2)) continue;
+        const Vertex<T> v0{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]};
+        const Vertex<T> v1{b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]};
+        const Vertex<T> v2{b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]};
         const TrianglePoint<T> t = closest_on_triangle(p, v0, v1, v2);
         const T d2 = dot(t.gap, t.gap);
         if (d2 < n.best2 || (d2 == n.best2 && b.primitive[k] < n.primitive))
@@ -199,14 +208,18 @@ ISIN_DETAIL_INLINE void nearest_triangle(const BvhTree<T>& tree, const TriangleB
                                          NearestTriangle<T>& n) noexcept {
     const T q[3] = {q_tree.x, q_tree.y, q_tree.z};
     if constexpr (Map::moved) {
-        T reach2 = n.best2 / map.scale2; // the tree space's sphere
-        walk_nearest(tree, q, reach2, [&](std::uint32_t leaf) ISIN_DETAIL_LAMBDA_INLINE {
-            nearest_in_leaf(blocks, leaf, q, p, map, n);
-            reach2 = n.best2 / map.scale2;
-        });
+        const T pw[3] = {p.x, p.y, p.z};
+        TriangleBlock<T> scratch;
+        walk_nearest_by(
+            tree,
+            [&](const typename BvhTree<T>::Node& node, T(&d2)[8])
+                ISIN_DETAIL_LAMBDA_INLINE { map.node_bounds(node, q, d2); },
+            n.best2,
+            [&](std::uint32_t leaf)
+                ISIN_DETAIL_LAMBDA_INLINE { nearest_in_leaf(map.block(blocks[leaf], scratch), leaf, pw, p, n); });
     } else {
         walk_nearest(tree, q, n.best2, [&](std::uint32_t leaf) ISIN_DETAIL_LAMBDA_INLINE {
-            nearest_in_leaf(blocks, leaf, q, p, map, n);
+            nearest_in_leaf(blocks[leaf], leaf, q, p, n);
         });
     }
 }
@@ -217,11 +230,12 @@ template <class T, class Map>
                                        const NearestTriangle<T>& n) noexcept {
     PointHit<T> best;
     if (n.lane < 0) return best; // nothing within the start radius
-    const typename TriangleBlocks<T>::Block& b = blocks[n.leaf];
+    TriangleBlock<T> scratch;
+    const TriangleBlock<T>& b = map.block(blocks[n.leaf], scratch);
     const int k = n.lane;
-    const Triangle<T> tri{map(Vertex<T>{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]}),
-                          map(Vertex<T>{b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]}),
-                          map(Vertex<T>{b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]})};
+    const Triangle<T> tri{{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]},
+                          {b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]},
+                          {b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]}};
     best.point = triangle_point(tri, n.found.u, n.found.v);
     best.distance = std::sqrt(n.best2);
     best.primitive = n.primitive;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <type_traits>
 
@@ -18,14 +19,50 @@
 namespace isin {
 namespace detail {
 
-/// A placed mesh's triangles in the world for the closest-point walk: x ↦ M·x + d, with
-/// scale2 ≤ σ_min(M)², so that a world distance is at least √scale2 times the mesh space's.
+/// A placed mesh's triangles in the world for the closest-point walk (bvh/closest_point.hpp):
+/// x ↦ M·x + d, p the query point in the world and scale2 ≤ σ_min(M)².
 template <class T>
 struct PlacedSpace {
     static constexpr bool moved = true;
     const Transform<T>& to_world;
+    T p[3];
     T scale2;
-    [[nodiscard]] Vertex<T> operator()(const Vertex<T>& v) const noexcept { return to_world.point(v); }
+
+    /// Lower bounds of the squared world distances from p to a node's 8 children (q: p in mesh
+    /// space): the larger of scale2 times the mesh space's (|M·v| ≥ σ_min·|v|) and the distance
+    /// to the world box of each moved box (centre M·c + d, half extents |M|·e), widened by a few
+    /// ulps for rounding. An empty slot gives NaN (its centre is +∞ − ∞).
+    void node_bounds(const typename BvhTree<T>::Node& n, const T (&q)[3], T (&d2)[8]) const noexcept {
+        T mesh2[8];
+        box_distances<T>(n.lo, n.hi, q, mesh2);
+        alignas(8 * sizeof(T)) T lo[3][8], hi[3][8];
+        const T eps4 = T(4) * std::numeric_limits<T>::epsilon();
+        for (int r = 0; r < 3; ++r)
+            for (int k = 0; k < 8; ++k) {
+                T c = component(to_world.d, r), e = T(0);
+                for (int a = 0; a < 3; ++a) {
+                    c += to_world.m[r][a] * ((n.lo[a][k] + n.hi[a][k]) * T(0.5));
+                    e += std::fabs(to_world.m[r][a]) * ((n.hi[a][k] - n.lo[a][k]) * T(0.5));
+                }
+                const T reach = e + eps4 * (std::fabs(c) + e);
+                lo[r][k] = c - reach, hi[r][k] = c + reach;
+            }
+        box_distances<T>(lo, hi, p, d2);
+        for (int k = 0; k < 8; ++k) {
+            const T scaled = mesh2[k] * scale2;
+            d2[k] = d2[k] < scaled ? scaled : d2[k]; // a NaN world box stays NaN: skipped
+        }
+    }
+    /// Block b's triangles moved to the world, into `out` (the same lanes and indices).
+    [[nodiscard]] const TriangleBlock<T>& block(const TriangleBlock<T>& b, TriangleBlock<T>& out) const noexcept {
+        for (int v = 0; v < 3; ++v)
+            for (int r = 0; r < 3; ++r)
+                for (int k = 0; k < 8; ++k)
+                    out.v[v][r][k] = to_world.m[r][0] * b.v[v][0][k] + to_world.m[r][1] * b.v[v][1][k] +
+                                     to_world.m[r][2] * b.v[v][2][k] + component(to_world.d, r);
+        std::memcpy(out.primitive, b.primitive, sizeof out.primitive);
+        return out;
+    }
 };
 
 /// The smallest and largest eigenvalues of the symmetric 3×3 matrix `a` (overwritten), by
@@ -198,8 +235,8 @@ inline void Scene<T, Shapes...>::closest_in_placement(std::uint32_t i, const Ver
         } else {
             best2 = n.best2;
         }
-    } else { // boxes and planes bounded in mesh space times σ_min, triangles exact in the world
-        const detail::PlacedSpace<T> world{inst.to_world, inst.scale2};
+    } else { // nodes bounded in the world and by σ_min, each leaf's triangles moved to the world
+        const detail::PlacedSpace<T> world{inst.to_world, {p.x, p.y, p.z}, inst.scale2};
         detail::NearestTriangle<T> n{best2};
         detail::nearest_triangle(bvh.tree(), bvh.blocks(), inst.to_object.point(p), p, world, n);
         if (n.lane < 0) return;
