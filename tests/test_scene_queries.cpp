@@ -240,3 +240,34 @@ TEST_CASE_TEMPLATE("Scene::closest_point: the array form answers as one by one",
         CHECK_FALSE(out.back());
     }
 }
+
+TEST_CASE_TEMPLATE("Scene::closest_point on a StandardScene: textured triangles, spheres, a placed mesh", T, float,
+                   double) {
+    isin::StandardScene<T> scene;
+    Reference<T> ref;
+    const auto material = scene.add_material({});
+    scene.add_textured_rectangle({T(0), T(-3), T(0)}, {T(2), T(-3), T(0)}, {T(0), T(-3), T(2)}, material);
+    const isin::Vertex<T> v0{T(0), T(-3), T(0)}, v1{T(2), T(-3), T(0)}, v2{T(0), T(-3), T(2)}, v3 = v1 + v2 - v0;
+    ref.tris.push_back({{wide(v0), wide(v1), wide(v2)}, 2, 0});
+    ref.tris.push_back({{wide(v3), wide(v2), wide(v1)}, 2, 1});
+    scene.add(isin::Sphere<T>{{T(1), T(3), T(1)}, T(0.5)}, material);
+    ref.balls.push_back({{LD(1), LD(3), LD(1)}, LD(0.5), 0, 0});
+    const auto mesh = solids::icosphere<T>(1, {0, 0, 0}, 1.0);
+    const auto id = scene.add_mesh(mesh, material);
+    ref.place(mesh, isin::Transform<T>::identity(), 3);
+    const auto squash =
+        isin::Transform<T>::translation({T(-3), T(1), T(0)}) * isin::Transform<T>::scaling({T(2), T(0.5), T(1)});
+    scene.add_instance(id, squash);
+    ref.place(mesh, squash, 4);
+    ref.box.grow(isin::Vertex<LD>{LD(-6), LD(-4), LD(-2)}), ref.box.grow(isin::Vertex<LD>{LD(3), LD(4), LD(3)});
+    std::mt19937_64 rng(31);
+    std::uniform_real_distribution<double> u(-6, 4);
+    for (int i = 0; i < 200; ++i) {
+        const isin::Vertex<T> p{T(u(rng)), T(u(rng)), T(u(rng))};
+        check_hit(scene.closest_point(p), ref, p);
+    }
+    const auto above = scene.closest_point({T(1), T(-2.75), T(0.5)}); // over the rectangle's first triangle
+    CHECK(above.geometry == 2);
+    CHECK(above.primitive == 0);
+    CHECK(above.distance == doctest::Approx(0.25));
+}
