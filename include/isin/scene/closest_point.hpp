@@ -98,8 +98,9 @@ template <class T>
     const Vertex<T> D = p - s.center;
     const T l = length(D);
     if (!(l < std::numeric_limits<T>::infinity())) return hit;
-    hit.distance = std::fabs(l - r);
-    hit.point = l > T(0) ? s.center + (r / l) * D : s.center + Vertex<T>{r, T(0), T(0)};
+    hit.distance = std::fabs(l - r); // beyond the note: | |p − C| − r |
+    hit.point = l > T(0) ? s.center + (r / l) * D
+                         : s.center + Vertex<T>{r, T(0), T(0)}; // beyond the note: C + r·(p − C)/|p − C|
     return hit;
 }
 
