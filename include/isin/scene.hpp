@@ -37,6 +37,7 @@
 #include "error_bound.hpp"
 #include "hit.hpp"
 #include "indexed_mesh.hpp"
+#include "point_hit.hpp"
 #include "primitive.hpp"
 #include "ray.hpp"
 #include "ray_lanes.hpp"
@@ -52,6 +53,13 @@ namespace isin {
 /// A placement of a mesh in a scene (add_mesh places it once, add_instance again).
 struct InstanceId {
     std::uint32_t index;
+};
+
+/// The closest point of a Scene (Scene::closest_point): PointHit's fields, `primitive` the object's
+/// index in its kind or the placed mesh's triangle, and `geometry` which holds it, as Hit's.
+template <class T>
+struct ScenePointHit : PointHit<T> {
+    std::uint32_t geometry = PointHit<T>::none; ///< a kind's position, or kinds + i for placement i
 };
 
 namespace detail {
@@ -272,6 +280,14 @@ public:
                        const StreamOptions& options) const;
     void transmittance(const Ray<T>* rays, std::size_t count, const T* t_max, T* through) const;
 
+    /// The closest point to p within max_distance of the placed meshes (exact in the world under any
+    /// transform), the triangle kinds and the spheres; other kinds are skipped (docs/queries.md).
+    /// A miss (false) when nothing is within reach, for a NaN or infinite p, or a NaN max_distance.
+    [[nodiscard]] ScenePointHit<T> closest_point(const Vertex<T>& p,
+                                                 T max_distance = std::numeric_limits<T>::infinity()) const;
+    /// out[i] = closest_point(points[i]) for i < count, on up to `threads` threads (0 = every core).
+    void closest_point(const Vertex<T>* points, std::size_t count, ScenePointHit<T>* out, int threads = 0) const;
+
     /// Point, normals, material, texture coordinates and colour of a hit of `ray`.
     [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const Hit<T>& hit) const;
 
@@ -292,6 +308,9 @@ private:
         Transform<T> to_world, to_object;
         bool identity = true;
         Box<T> box; // in the world
+        // Closest points: M = s·R up to rounding (`similar`, scale2 = s²), else scale2 ≤ σ_min(M)²
+        bool similar = true;
+        T scale2 = T(1);
     };
 
     // Setup (below the class).
@@ -400,6 +419,16 @@ private:
     /// Calls visit(i, t_max) for each placement the ray may meet, until visit returns true.
     template <class Visit_>
     void for_each_instance(const Ray<T>& ray, T& t_max, Visit_&& visit) const;
+
+    // Closest points (scene/closest_point.hpp).
+    /// Sets inst.similar and inst.scale2 from inst.to_world (once, when the placement is added).
+    static void measure_stretch(Instance& inst) noexcept;
+    /// The closest point of kind `kind`'s objects within √best2 (lowered), into `best`.
+    template <class Kind, class Objects>
+    void closest_of_kind(Kind kind, const Objects& vec, const Vertex<T>& p, T& best2,
+                         ScenePointHit<T>& best) const noexcept;
+    /// The closest point of placement i within √best2 (lowered), into `best`.
+    void closest_in_placement(std::uint32_t i, const Vertex<T>& p, T& best2, ScenePointHit<T>& best) const noexcept;
 
     // Streams of rays (scene/stream.hpp).
     /// The rays of a stream given as one array: read in place (the other forms are copied).
@@ -539,6 +568,7 @@ inline InstanceId Scene<T, Shapes...>::add_instance(MeshId id, const Transform<T
     if (!finite || !is_finite(to_world.d) || !is_finite(inst.to_object.d))
         throw std::invalid_argument("isin::Scene::add_instance: the transform is not finite or cannot be inverted");
     inst.identity = to_world.is_identity();
+    measure_stretch(inst);
     inst.box = world_box(meshes_[id.index].bvh->tree().bounds(), to_world);
     instances_.push_back(inst);
     top_.reset(); // stale: commit() or the next trace builds it again
@@ -636,6 +666,7 @@ inline Box<T> Scene<T, Shapes...>::world_box(const Box<T>& b, const Transform<T>
 #include "scene/build.hpp"
 #include "scene/trace.hpp"
 #include "scene/stream.hpp"
+#include "scene/closest_point.hpp"
 
 // StandardScene's members come from isin::io where ISIN_COMPILED is defined (detail/compiled.hpp).
 #if defined(ISIN_COMPILED)

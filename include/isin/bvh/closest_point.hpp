@@ -2,7 +2,7 @@
 /// isin — the closest point of a Bvh's triangles to a point: a walk of the tree nearest box
 /// first, inside a sphere around the point that shrinks to each closer triangle found (boxes
 /// farther than the sphere are skipped), each leaf's triangles by Ericson's regions
-/// (point_hit.hpp). Bvh::closest_point calls it.
+/// (point_hit.hpp). Bvh::closest_point calls it, and Scene::closest_point for each placed mesh.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -115,20 +115,12 @@ ISIN_DETAIL_INLINE void triangle_lower_bounds(const TriangleBlock<T>& b, const T
 #endif
 }
 
-/// closest_point (below) with the sphere's squared radius starting at `start2` (max_distance²,
-/// or less: a bound known to hold the answer).
-template <class T>
-[[nodiscard]] PointHit<T> closest_point_within(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks,
-                                               const Vertex<T>& p, T start2) noexcept {
-    PointHit<T> best;
+/// Walks `tree` nearest child first: bound(node, d2) gives lower bounds of the squared distances
+/// to a node's 8 children (NaN or +∞ for an empty slot); calls leaf(index) for each leaf within
+/// `reach2`, which the leaf may lower (children beyond it are then skipped).
+template <class T, class Bound, class Leaf>
+ISIN_DETAIL_INLINE void walk_nearest_by(const BvhTree<T>& tree, Bound&& bound, const T& reach2, Leaf&& leaf) noexcept {
     using Tree = BvhTree<T>;
-    const T q[3] = {p.x, p.y, p.z};
-    T best2 = start2; // the sphere's squared radius; +∞ for no bound
-    TrianglePoint<T> found{};
-    std::uint32_t found_primitive = PointHit<T>::none;
-    std::uint32_t found_leaf = 0;
-    int found_lane = -1;
-
     struct Entry {
         T d2;
         std::uint32_t ref;
@@ -138,49 +130,127 @@ template <class T>
     stack[top++] = {T(0), 0};
     while (top > 0) {
         const Entry e = stack[--top];
-        if (e.d2 > best2) continue; // the sphere shrank below this box since it was pushed
+        if (e.d2 > reach2) continue; // the sphere shrank below this box since it was pushed
         if (!(e.ref & Tree::leaf_bit)) {
             const typename Tree::Node& n = tree.nodes()[e.ref];
             T d2[8];
-            box_distances<T>(n.lo, n.hi, q, d2);
+            bound(n, d2);
             // Pushed farthest first (insertion into the stack's top), so the nearest box is
             // walked first and shrinks the sphere; empty slots (+∞) and NaN fail the test.
             const int base = top;
             for (int k = 0; k < 8; ++k) {
-                if (!(d2[k] <= best2)) continue;
+                if (!(d2[k] <= reach2)) continue;
                 int j = top++;
                 for (; j > base && stack[j - 1].d2 < d2[k]; --j) stack[j] = stack[j - 1];
                 stack[j] = {d2[k], n.child[k]};
             }
             continue;
         }
-        const std::uint32_t leaf = e.ref & ~Tree::leaf_bit;
-        const typename TriangleBlocks<T>::Block& b = blocks[leaf];
-        T box2[8]; // lower bounds of the 8 triangles' squared distances: the exact test only where they are in reach
-        triangle_lower_bounds(b, q, box2);
-        for (int k = 0, live = live_lanes(b); k < live; ++k) {
-            if (!(box2[k] <= best2)) continue;
-            const Vertex<T> v0{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]};
-            const Vertex<T> v1{b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]};
-            const Vertex<T> v2{b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]};
-            const TrianglePoint<T> t = closest_on_triangle(p, v0, v1, v2);
-            const T d2 = dot(t.gap, t.gap);
-            if (d2 < best2 || (d2 == best2 && b.primitive[k] < found_primitive)) {
-                best2 = d2, found = t, found_primitive = b.primitive[k], found_leaf = leaf, found_lane = k;
-            }
-        }
+        leaf(e.ref & ~Tree::leaf_bit);
     }
-    if (found_lane < 0) return best; // nothing within the start radius
-    const typename TriangleBlocks<T>::Block& b = blocks[found_leaf];
-    const int k = found_lane;
+}
+
+/// walk_nearest_by with the distances from the point q to the children's boxes.
+template <class T, class Leaf>
+ISIN_DETAIL_INLINE void walk_nearest(const BvhTree<T>& tree, const T (&q)[3], const T& reach2, Leaf&& leaf) noexcept {
+    walk_nearest_by(
+        tree,
+        [&q](const typename BvhTree<T>::Node& n, T(&d2)[8])
+            ISIN_DETAIL_LAMBDA_INLINE { box_distances<T>(n.lo, n.hi, q, d2); },
+        reach2, static_cast<Leaf&&>(leaf));
+}
+
+/// Where a walk's triangles stand: in the tree's own space (the Bvh's query). A map that moves
+/// them (`moved`) also gives node_bounds(node, q, d2) from the tree-space point q, and
+/// block(b, scratch), the block's triangles moved (into scratch).
+template <class T>
+struct SameSpace {
+    static constexpr bool moved = false;
+    [[nodiscard]] const TriangleBlock<T>& block(const TriangleBlock<T>& b, TriangleBlock<T>&) const noexcept {
+        return b;
+    }
+};
+
+/// The triangle closest so far in a walk: its squared distance `best2` (the sphere's squared
+/// radius, which starts at a bound), where it is on its triangle, and its block and lane.
+template <class T>
+struct NearestTriangle {
+    T best2;
+    TrianglePoint<T> found{};
+    std::uint32_t primitive = PointHit<T>::none, leaf = 0;
+    int lane = -1;
+};
+
+/// Tests block `b` (leaf `leaf`'s triangles) against p (`q`: the same, as an array), lowering
+/// n.best2.
+template <class T>
+ISIN_DETAIL_INLINE void nearest_in_leaf(const TriangleBlock<T>& b, std::uint32_t leaf, const T (&q)[3],
+                                        const Vertex<T>& p, NearestTriangle<T>& n) noexcept {
+    T box2[8]; // lower bounds of the 8 triangles' squared distances: the exact test only where they are in reach
+    triangle_lower_bounds(b, q, box2);
+    for (int k = 0, live = live_lanes(b); k < live; ++k) {
+        if (!(box2[k] <= n.best2)) continue;
+        const Vertex<T> v0{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]};
+        const Vertex<T> v1{b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]};
+        const Vertex<T> v2{b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]};
+        const TrianglePoint<T> t = closest_on_triangle(p, v0, v1, v2);
+        const T d2 = dot(t.gap, t.gap);
+        if (d2 < n.best2 || (d2 == n.best2 && b.primitive[k] < n.primitive))
+            n.best2 = d2, n.found = t, n.primitive = b.primitive[k], n.leaf = leaf, n.lane = k;
+    }
+}
+
+/// Walks the tree for the triangle closest to p within √n.best2 (lowered as closer ones are
+/// found), its triangles placed by `map`; `q_tree` is p in the tree's space.
+template <class T, class Map>
+ISIN_DETAIL_INLINE void nearest_triangle(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks,
+                                         const Vertex<T>& q_tree, const Vertex<T>& p, const Map& map,
+                                         NearestTriangle<T>& n) noexcept {
+    const T q[3] = {q_tree.x, q_tree.y, q_tree.z};
+    if constexpr (Map::moved) {
+        const T pw[3] = {p.x, p.y, p.z};
+        TriangleBlock<T> scratch;
+        walk_nearest_by(
+            tree,
+            [&](const typename BvhTree<T>::Node& node, T(&d2)[8])
+                ISIN_DETAIL_LAMBDA_INLINE { map.node_bounds(node, q, d2); },
+            n.best2,
+            [&](std::uint32_t leaf)
+                ISIN_DETAIL_LAMBDA_INLINE { nearest_in_leaf(map.block(blocks[leaf], scratch), leaf, pw, p, n); });
+    } else {
+        walk_nearest(tree, q, n.best2, [&](std::uint32_t leaf) ISIN_DETAIL_LAMBDA_INLINE {
+            nearest_in_leaf(blocks[leaf], leaf, q, p, n);
+        });
+    }
+}
+
+/// The PointHit a walk found (a miss when nothing): the point on the triangle placed by `map`.
+template <class T, class Map>
+[[nodiscard]] PointHit<T> point_hit_of(const TriangleBlocks<T>& blocks, const Map& map,
+                                       const NearestTriangle<T>& n) noexcept {
+    PointHit<T> best;
+    if (n.lane < 0) return best; // nothing within the start radius
+    TriangleBlock<T> scratch;
+    const TriangleBlock<T>& b = map.block(blocks[n.leaf], scratch);
+    const int k = n.lane;
     const Triangle<T> tri{{b.v[0][0][k], b.v[0][1][k], b.v[0][2][k]},
                           {b.v[1][0][k], b.v[1][1][k], b.v[1][2][k]},
                           {b.v[2][0][k], b.v[2][1][k], b.v[2][2][k]}};
-    best.point = triangle_point(tri, found.u, found.v);
-    best.distance = std::sqrt(best2);
-    best.primitive = found_primitive;
-    best.u = found.u, best.v = found.v;
+    best.point = triangle_point(tri, n.found.u, n.found.v);
+    best.distance = std::sqrt(n.best2);
+    best.primitive = n.primitive;
+    best.u = n.found.u, best.v = n.found.v;
     return best;
+}
+
+/// closest_point (below) with the sphere's squared radius starting at `start2` (max_distance²,
+/// or less: a bound known to hold the answer).
+template <class T>
+[[nodiscard]] PointHit<T> closest_point_within(const BvhTree<T>& tree, const TriangleBlocks<T>& blocks,
+                                               const Vertex<T>& p, T start2) noexcept {
+    NearestTriangle<T> n{start2};
+    nearest_triangle(tree, blocks, p, p, SameSpace<T>{}, n);
+    return point_hit_of(blocks, SameSpace<T>{}, n);
 }
 
 /// The closest point of the tree's triangles to p within max_distance (PointHit; a miss when
