@@ -271,3 +271,117 @@ TEST_CASE_TEMPLATE("Scene::closest_point on a StandardScene: textured triangles,
     CHECK(above.primitive == 0);
     CHECK(above.distance == doctest::Approx(0.25));
 }
+
+namespace {
+
+// Brute force's crossing count of a ray with the reference's surfaces, t in (0, t_max), in long
+// double (Möller–Trumbore per triangle, both roots per sphere); `clear` is false when a crossing
+// lies so near an edge, a tangent, t = 0 or t_max that rounding may decide it.
+template <class T>
+std::size_t reference_crossings(const Reference<T>& ref, const isin::Ray<T>& ray, T t_max, bool& clear) {
+    const auto o = wide(ray.origin), d = wide(ray.direction);
+    const LD tm = LD(t_max), margin = LD(1e-4);
+    const auto near_end = [&](LD t) { return std::fabs(t) < margin || std::fabs(t - tm) < margin * (LD(1) + tm); };
+    std::size_t count = 0;
+    clear = true;
+    for (const auto& tri : ref.tris) {
+        const auto e1 = tri.v[1] - tri.v[0], e2 = tri.v[2] - tri.v[0], pv = isin::cross(d, e2);
+        const LD det = isin::dot(e1, pv);
+        if (std::fabs(det) < LD(1e-12)) continue; // parallel to the plane: never a crossing here
+        const auto s = o - tri.v[0], qv = isin::cross(s, e1);
+        const LD u = isin::dot(s, pv) / det, v = isin::dot(d, qv) / det, t = isin::dot(e2, qv) / det;
+        const LD edge = std::min({u, v, LD(1) - u - v});
+        if (std::fabs(edge) < margin && t > -margin && t < tm + margin) clear = false;
+        if (edge > 0 && t > 0 && t < tm) count += 1, clear = clear && !near_end(t);
+    }
+    for (const auto& b : ref.balls) {
+        const auto l = b.center - o;
+        const LD a = isin::dot(d, d), s = isin::dot(l, d) / a, m2 = isin::dot(l, l) - s * s * a;
+        const LD disc = (b.radius * b.radius - m2) / a;
+        if (std::fabs(disc) < margin) clear = false;
+        if (disc <= 0) continue;
+        for (const LD t : {s - std::sqrt(disc), s + std::sqrt(disc)})
+            if (t > 0 && t < tm)
+                count += 1, clear = clear && !near_end(t);
+            else if (near_end(t))
+                clear = false;
+    }
+    return count;
+}
+
+} // namespace
+
+TEST_CASE_TEMPLATE("Scene::count_hits against brute force: every transform, spheres, triangles", T, float, double) {
+    const Fixture<T> f;
+    std::mt19937_64 rng(41);
+    std::uniform_real_distribution<double> u(-9, 9), dir(-1, 1), len(0.5, 12);
+    std::size_t compared = 0, crossings = 0;
+    for (int i = 0; i < 400; ++i) {
+        const isin::Vertex<T> o{T(u(rng)), T(u(rng)), T(u(rng))}, jitter{T(dir(rng)), T(dir(rng)), T(dir(rng))};
+        const isin::Ray<T> ray{o, i % 4 < 2 ? f.centres[std::size_t(i) % f.centres.size()] + jitter - o : jitter};
+        const T t_max = i % 2 ? std::numeric_limits<T>::infinity() : T(len(rng));
+        bool clear = true;
+        const std::size_t expected = reference_crossings(f.ref, ray, t_max, clear);
+        if (!clear) continue;
+        CAPTURE(i);
+        CHECK(f.scene.count_hits(ray, t_max) == expected);
+        ++compared, crossings += expected;
+    }
+    CHECK(compared > 350);
+    CHECK(crossings > 300); // the rays do cross things
+}
+
+TEST_CASE_TEMPLATE("Scene::count_hits through the placed meshes' vertices and edges: even from outside", T, float,
+                   double) {
+    const Fixture<T> f;
+    const isin::Vertex<T> from{T(-30), T(21), T(-17)}; // outside everything, off every axis
+    const auto at = [](const isin::Vertex<LD>& v) { return isin::Vertex<T>{T(v.x), T(v.y), T(v.z)}; };
+    std::size_t odd = 0, rays = 0, crossings = 0;
+    for (std::size_t i = 0; i < f.ref.tris.size(); i += 3) {
+        const auto& t = f.ref.tris[i];
+        if (t.geometry < 2) continue; // the loose triangles are open surfaces
+        for (const auto& aim : {t.v[0], t.v[1], (t.v[0] + t.v[1]) * LD(0.5), (t.v[1] + t.v[2]) * LD(0.5)}) {
+            const isin::Ray<T> ray{from, at(aim) - from};
+            std::size_t loose = 0; // crossings of the loose triangles, counted apart
+            isin::detail::WatertightShear<T> shear;
+            REQUIRE(shear.set(ray.direction));
+            for (const auto& l : f.ref.tris)
+                if (l.geometry == 1)
+                    loose += isin::detail::crosses(at(l.v[0]) - from, at(l.v[1]) - from, at(l.v[2]) - from, shear,
+                                                   std::numeric_limits<T>::infinity());
+            const std::size_t n = f.scene.count_hits(ray);
+            odd += (n - loose) % 2, ++rays, crossings += n;
+        }
+    }
+    CHECK(rays > 500);
+    CHECK(crossings >= 2 * rays); // each ray crosses at least the mesh it is aimed at
+    CHECK(odd == 0);
+}
+
+TEST_CASE_TEMPLATE("Scene::count_hits: t_max, NaN rays, empty scenes, spheres without a Bvh", T, float, double) {
+    const Fixture<T> f;
+    const T nan = std::numeric_limits<T>::quiet_NaN(), inf = std::numeric_limits<T>::infinity();
+    const isin::Vertex<T> centre{T(0.1), T(-0.2), T(0.05)};      // inside the mesh where it stands
+    const isin::Ray<T> out{centre, {T(0.31), T(0.17), T(0.93)}}; // through no vertex or edge
+    bool clear = true;
+    const std::size_t leaving = reference_crossings(f.ref, out, T(1.5), clear);
+    REQUIRE(clear);
+    CHECK(leaving % 2 == 1); // from inside the mesh where it stands: an odd count
+    CHECK(f.scene.count_hits(out, T(1.5)) == leaving);
+    CHECK(f.scene.count_hits(out, T(0.5)) == 0); // not yet at the unit icosphere's surface
+    CHECK(f.scene.count_hits(out, T(0)) == 0);
+    CHECK(f.scene.count_hits(out, -inf) == 0);
+    CHECK(f.scene.count_hits(out, nan) == 0);
+    CHECK(f.scene.count_hits({{nan, T(0), T(0)}, {T(0), T(0), T(1)}}) == 0);
+    CHECK(f.scene.count_hits({centre, {T(0), T(0), T(0)}}) == 0);
+    CHECK(f.scene.count_hits({centre, {inf, T(0), T(0)}}) == 0);
+    isin::Scene<T, isin::Sphere, isin::Triangle> empty;
+    CHECK(empty.count_hits(out) == 0);
+    const auto material = empty.add_material({});
+    empty.add(isin::Sphere<T>{{T(0), T(0), T(5)}, T(2)}, material); // one sphere, no Bvh
+    CHECK(empty.count_hits({{T(0), T(0), T(0)}, {T(0), T(0), T(1)}}) == 2);
+    CHECK(empty.count_hits({{T(0), T(0), T(0)}, {T(0), T(0), T(1)}}, T(4)) == 1);
+    CHECK(empty.count_hits({{T(0), T(0), T(5)}, {T(0), T(1), T(0)}}) == 1);  // from its centre
+    CHECK(empty.count_hits({{T(2), T(0), T(0)}, {T(0), T(0), T(1)}}) == 0);  // touches it only
+    CHECK(empty.count_hits({{T(0), T(0), T(0)}, {T(0), T(0), T(-1)}}) == 0); // away from it
+}

@@ -287,6 +287,9 @@ public:
                                                  T max_distance = std::numeric_limits<T>::infinity()) const;
     /// out[i] = closest_point(points[i]) for i < count, on up to `threads` threads (0 = every core).
     void closest_point(const Vertex<T>* points, std::size_t count, ScenePointHit<T>* out, int threads = 0) const;
+    /// How many times the ray crosses the placed meshes, the triangle kinds and the spheres with t
+    /// in (0, t_max), each mesh's shared edges and vertices once: even from outside closed ones.
+    [[nodiscard]] std::size_t count_hits(const Ray<T>& ray, T t_max = std::numeric_limits<T>::infinity()) const;
 
     /// Point, normals, material, texture coordinates and colour of a hit of `ray`.
     [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const Hit<T>& hit) const;
@@ -429,6 +432,10 @@ private:
                          ScenePointHit<T>& best) const noexcept;
     /// The closest point of placement i within √best2 (lowered), into `best`.
     void closest_in_placement(std::uint32_t i, const Vertex<T>& p, T& best2, ScenePointHit<T>& best) const noexcept;
+    // Crossing counts (scene/count_hits.hpp).
+    /// The crossings of kind `kind`'s objects with t in (0, t_max).
+    template <class Kind, class Objects>
+    std::size_t count_hits_of_kind(Kind kind, const Objects& vec, const Ray<T>& ray, T t_max) const noexcept;
 
     // Streams of rays (scene/stream.hpp).
     /// The rays of a stream given as one array: read in place (the other forms are copied).
@@ -667,6 +674,7 @@ inline Box<T> Scene<T, Shapes...>::world_box(const Box<T>& b, const Transform<T>
 #include "scene/trace.hpp"
 #include "scene/stream.hpp"
 #include "scene/closest_point.hpp"
+#include "scene/count_hits.hpp"
 
 // StandardScene's members come from isin::io where ISIN_COMPILED is defined (detail/compiled.hpp).
 #if defined(ISIN_COMPILED)
