@@ -326,6 +326,61 @@ template <class T>
 
 } // namespace detail
 
+namespace detail {
+
+/// §7 for an area light from its sums over samples (or quadrature nodes): kd·Σ(N·L)·object +
+/// ks·Σ(highlight)·highlight colour, times the light's colour and `scale` (1/n, or a weight).
+template <class T>
+[[nodiscard]] inline Color<T> light_colour(const LitPoint<T>& p, const RectLight<T>& light, T diffuse, T specular,
+                                           T scale) noexcept {
+    return (p.kd * diffuse * p.object + p.ks * specular * p.highlight) * light.color *
+           scale; // §7: kd·diffuse + ks·specular
+}
+
+/// §9: what the shadow rays to the four corners found (`seen`: 1 − blocked, or transmittance)
+/// among the corners above p's horizon, −1 when none is (§7: below it a corner adds nothing, and
+/// its ray meets p's own surface: it does not vote); `agree` becomes false when they differ.
+template <class T>
+[[nodiscard]] T corner_vote(const RectLight<T>& light, const LitPoint<T>& p, const T* seen, bool& agree) noexcept {
+    T corner = T(-1);
+    for (int c = 0; c < 4; ++c) {
+        if (!(dot(p.N, light_corner(light, c) - p.point) > T(0))) continue;
+        if (corner < T(0)) corner = seen[c];
+        agree = agree && seen[c] == corner;
+    }
+    return corner;
+}
+
+/// The unshadowed sums of N·L and of the highlight over `light` seen from p by the order × order
+/// Gauss–Legendre rule (weights summing to 1), where smooth_order says it holds; in batch's lanes.
+template <class T>
+void quadrature_sums(LightSampleChunk<T>& batch, const RectLight<T>& light, const LitPoint<T>& p, int order,
+                     bool highlight, std::uint32_t power, T min_cos, T& diffuse, T& specular) noexcept {
+    using V = typename LaneRegister<T>::V;
+    constexpr int W = int(LaneRegister<T>::width);
+    const T* node = order == 4 ? GaussLegendre<T>::node4 : GaussLegendre<T>::node3;
+    const T* weight = order == 4 ? GaussLegendre<T>::weight4 : GaussLegendre<T>::weight3;
+    alignas(64) T w[LightSampleChunk<T>::size];
+    const int m = order * order, padded = (m + W - 1) / W * W;
+    for (int b = 0; b < order; ++b)
+        for (int a = 0; a < order; ++a)
+            batch.u[a + b * order] = node[a], batch.v[a + b * order] = node[b],
+                            w[a + b * order] = weight[a] * weight[b];
+    for (int k = m; k < padded; ++k) batch.u[k] = batch.v[k] = T(0.5), w[k] = T(0);
+    batch.points(light, p, padded);
+    for (int k = 0; k < padded; ++k) batch.through[k] = T(1);
+    batch.highlights(p, highlight, power, min_cos, padded);
+    V diffuse_sum = V(T(0)), specular_sum = V(T(0));
+    for (int b = 0; b < padded; b += W) {
+        const V weights = load_lanes<T, V>(w + b);
+        diffuse_sum = lane_fma(weights, load_lanes<T, V>(batch.n_dot_l + b), diffuse_sum);
+        specular_sum = lane_fma(weights, load_lanes<T, V>(batch.spec + b), specular_sum);
+    }
+    diffuse = lane_total<T>(diffuse_sum), specular = lane_total<T>(specular_sum);
+}
+
+} // namespace detail
+
 /// The mean over the rectangle of `light` of a PointLight's Phong term (§7) at p, shadows
 /// included (§9), estimated from s.samples stratified samples seeded by `seed`: the colour it adds
 /// to p's local colour. Shadow rays go to `scene` as a stream (occluded, or transmittance unless
@@ -434,28 +489,6 @@ template <class T, class SceneT>
             }
         return listed == 0 || trace_listed();
     };
-    // The unshadowed mean by Gauss–Legendre quadrature where it is smooth (smooth_order), `visible` times.
-    const auto quadrature = [&](int order, T visible) {
-        const T* node = order == 4 ? detail::GaussLegendre<T>::node4 : detail::GaussLegendre<T>::node3;
-        const T* weight = order == 4 ? detail::GaussLegendre<T>::weight4 : detail::GaussLegendre<T>::weight3;
-        alignas(64) T w[room];
-        const int m = order * order, padded = (m + W - 1) / W * W;
-        for (int b = 0; b < order; ++b)
-            for (int a = 0; a < order; ++a)
-                batch.u[a + b * order] = node[a], batch.v[a + b * order] = node[b],
-                                w[a + b * order] = weight[a] * weight[b];
-        for (int k = m; k < padded; ++k) batch.u[k] = batch.v[k] = T(0.5), w[k] = T(0);
-        batch.points(light, p, padded);
-        for (int k = 0; k < padded; ++k) batch.through[k] = T(1);
-        batch.highlights(p, highlight, power, min_cos, padded);
-        for (int b = 0; b < padded; b += W) {
-            const V weights = load(w + b);
-            diffuse_sum = lane_fma(weights, load(batch.n_dot_l + b), diffuse_sum);
-            specular_sum = lane_fma(weights, load(batch.spec + b), specular_sum);
-        }
-        const T diffuse = detail::lane_total<T>(diffuse_sum), specular = detail::lane_total<T>(specular_sum);
-        return (p.kd * diffuse * p.object + p.ks * specular * p.highlight) * light.color * visible; // §7, averaged
-    };
     if (!corners_first(LightSampling{n, s.adaptive, s.shadows, s.opaque})) {
         shade(T(-1));
     } else {
@@ -468,25 +501,21 @@ template <class T, class SceneT>
             shadow_rays += 4u;
             detail::shadow_visibility(scene, rays, 4u, s.opaque, one, seen);
         }
-        // Corners below p's horizon add nothing (§7: N·L ≤ 0) and their rays meet p's own surface: they do not vote.
-        T corner = T(-1);
         bool agree = true;
-        for (int c = 0; c < 4; ++c) {
-            if (!(dot(p.N, light_corner(light, c) - p.point) > T(0))) continue;
-            if (corner < T(0)) corner = seen[c];
-            agree = agree && seen[c] == corner;
-        }
+        const T corner = detail::corner_vote(light, p, seen, agree);
         if (corner < T(0)) return {T(0), T(0), T(0)}; // §7: the whole light below p's horizon
         agree = agree && (n < probe_from || probe_agrees(corner));
         if (agree && corner == T(0)) return {T(0), T(0), T(0)}; // umbra: every sample shadowed
         if (agree)
-            if (const int order = detail::smooth_order(light, p, highlight, min_cos, n))
-                return quadrature(order, corner);
+            if (const int order = detail::smooth_order(light, p, highlight, min_cos, n)) {
+                T diffuse = T(0), specular = T(0);
+                detail::quadrature_sums(batch, light, p, order, highlight, power, min_cos, diffuse, specular);
+                return detail::light_colour(p, light, diffuse, specular, corner); // the mean, `corner` times
+            }
         shade(agree ? corner : T(-1));
     }
     const T diffuse = detail::lane_total<T>(diffuse_sum), specular = detail::lane_total<T>(specular_sum);
-    return (p.kd * diffuse * p.object + p.ks * specular * p.highlight) * light.color *
-           inv_n; // §7: kd·diffuse + ks·specular, averaged
+    return detail::light_colour(p, light, diffuse, specular, inv_n); // averaged over the samples
 }
 
 } // namespace isin

@@ -330,26 +330,8 @@ private:
                     continue;
                 }
                 if (ref & Tree::leaf_bit) {
-                    const detail::TriangleBlock<T>& b = blocks[ref & ~Tree::leaf_bit];
-                    const int live = detail::live_lanes(b);
-                    for (int m = 0; m < live; ++m) {
-                        const Triangle<T> t = lane(b, m);
-                        const Vertex<double> v0 = to_double(t.v0), v1 = to_double(t.v1), v2 = to_double(t.v2);
-                        const Vertex<double> N = 0.5 * cross(v1 - v0, v2 - v0); // Barill: area vector
-                        a += N, total += length(N), weighted += length(N) * ((v0 + v1 + v2) / 3.0);
-                        err += 2.5 * ud * length(v1 - v0) * length(v2 - v0); // N from rounded edges
-                    }
-                    err += 8 * ud * (total + err); // the sums of 8
+                    leaf_dipole(blocks[ref & ~Tree::leaf_bit], a, total, c, r, err);
                     upper = total + err;
-                    if (total > 0) c = weighted / total; // Barill: the area-weighted centroid
-                    c = to_double(to_t(c));              // the ball is round the centre the walk uses
-                    double r2 = 0;
-                    for (int m = 0; m < live; ++m) {
-                        const Triangle<T> t = lane(b, m);
-                        for (const Vertex<T>& v : {t.v0, t.v1, t.v2})
-                            r2 = std::max(r2, dot(to_double(v) - c, to_double(v) - c));
-                    }
-                    r = std::sqrt(r2);
                 } else {
                     const FarField& g = far_[ref];
                     for (int m = 0; m < 8; ++m) {
@@ -416,6 +398,33 @@ private:
         }
         a_error_ = T(worst * (1 + 1e-3));
         c_error_ = T(worst_c * (1 + 1e-3));
+    }
+
+    // A leaf's dipole for build_far_field, in double: the sum `a` of its area vectors, their
+    // total area, the area-weighted centroid `c` (kept as is when the area is 0) rounded to T as
+    // the walk uses it, the radius r of the ball round c holding every vertex, and how far the
+    // computed a may be from the exact sum (`err`).
+    static void leaf_dipole(const detail::TriangleBlock<T>& b, Vertex<double>& a, double& total, Vertex<double>& c,
+                            double& r, double& err) noexcept {
+        constexpr double ud = std::numeric_limits<double>::epsilon() / 2;
+        const int live = detail::live_lanes(b);
+        Vertex<double> weighted{0, 0, 0};
+        for (int m = 0; m < live; ++m) {
+            const Triangle<T> t = lane(b, m);
+            const Vertex<double> v0 = to_double(t.v0), v1 = to_double(t.v1), v2 = to_double(t.v2);
+            const Vertex<double> N = 0.5 * cross(v1 - v0, v2 - v0); // Barill: area vector
+            a += N, total += length(N), weighted += length(N) * ((v0 + v1 + v2) / 3.0);
+            err += 2.5 * ud * length(v1 - v0) * length(v2 - v0); // N from rounded edges
+        }
+        err += 8 * ud * (total + err);       // the sums of 8
+        if (total > 0) c = weighted / total; // Barill: the area-weighted centroid
+        c = to_double(to_t(c));              // the ball is round the centre the walk uses
+        double r2 = 0;
+        for (int m = 0; m < live; ++m) {
+            const Triangle<T> t = lane(b, m);
+            for (const Vertex<T>& v : {t.v0, t.v1, t.v2}) r2 = std::max(r2, dot(to_double(v) - c, to_double(v) - c));
+        }
+        r = std::sqrt(r2);
     }
 
     [[nodiscard]] static Vertex<double> to_double(const Vertex<T>& v) noexcept {
