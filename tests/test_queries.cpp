@@ -10,16 +10,12 @@
 #include <vector>
 
 #include "support/solids.hpp"
+#include "support/wide.hpp"
 #include "support/workloads.hpp"
 
 namespace {
 
 using LD = long double;
-
-template <class T>
-isin::Vertex<LD> wide(const isin::Vertex<T>& p) {
-    return {LD(p.x), LD(p.y), LD(p.z)};
-}
 
 // The distance from p to the nearest triangle of `tris` (of those a Bvh keeps, non-degenerate,
 // unless `all`), in long double from the same T inputs: the reference for closest_point.

@@ -10,15 +10,11 @@
 #include <vector>
 
 #include "support/solids.hpp"
+#include "support/wide.hpp"
 
 namespace {
 
 using LD = long double;
-
-template <class T>
-isin::Vertex<LD> wide(const isin::Vertex<T>& p) {
-    return {LD(p.x), LD(p.y), LD(p.z)};
-}
 
 // The world-space surfaces of a scene, in long double from the same T inputs: each triangle of
 // each placement (M·v + d), the loose triangles and the spheres, with what the scene calls them.

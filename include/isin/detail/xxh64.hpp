@@ -43,27 +43,6 @@ public:
         buffered_ = n;
     }
 
-    /// Adds `count` records of `bytes` each at p, calling each(k) once the stripes of record k are
-    /// added: the caller's work on a record then runs beside the checksum's chain of multiplies,
-    /// which keeps a core waiting when it runs alone.
-    template <class Each>
-    void update_each(const unsigned char* p, std::size_t count, std::size_t bytes, Each&& each) {
-        const std::size_t n = count * bytes, head = buffered_ ? std::min<std::size_t>(32 - buffered_, n) : 0;
-        update(p, head); // completes the buffer, or takes all
-        std::size_t at = head;
-        std::uint64_t v0 = v_[0], v1 = v_[1], v2 = v_[2], v3 = v_[3];
-        for (std::size_t k = 0; k < count; ++k) {
-            for (const std::size_t end = (k + 1) * bytes; at + 32 <= end; at += 32) {
-                v0 = round(v0, read64(p + at)), v1 = round(v1, read64(p + at + 8));
-                v2 = round(v2, read64(p + at + 16)), v3 = round(v3, read64(p + at + 24));
-            }
-            each(k);
-        }
-        v_[0] = v0, v_[1] = v1, v_[2] = v2, v_[3] = v3;
-        total_ += at - head;
-        update(p + at, n - at); // less than a stripe
-    }
-
     /// The checksum of everything added so far.
     [[nodiscard]] std::uint64_t digest() const noexcept {
         std::uint64_t h;
