@@ -284,6 +284,12 @@ struct LightSampleChunk {
     }
 };
 
+/// §7: whether corner c of the light lies above p's horizon (N·L > 0 towards it).
+template <class T>
+[[nodiscard]] inline bool above_horizon(const RectLight<T>& light, const LitPoint<T>& p, int c) noexcept {
+    return dot(p.N, light_corner(light, c) - p.point) > T(0); // §7: N·L > 0
+}
+
 /// Gauss–Legendre nodes and weights on [0, 1] of orders 3 and 4 (Abramowitz and Stegun 25.4.29):
 /// exact for polynomials of degree 2·order − 1 in u and in v.
 template <class T>
@@ -306,7 +312,7 @@ template <class T>
 [[nodiscard]] inline int smooth_order(const RectLight<T>& light, const LitPoint<T>& p, bool highlight, T min_cos,
                                       int samples) noexcept {
     for (int c = 0; c < 4; ++c)
-        if (!(dot(p.N, light_corner(light, c) - p.point) > T(0))) return 0; // §7: N·L > 0 over the whole light
+        if (!above_horizon(light, p, c)) return 0; // §7: N·L > 0 over the whole light
     const Vertex<T> centre = light.corner + T(0.5) * (light.edge_u + light.edge_v);
     const T r = T(0.5) * std::max(length(light.edge_u + light.edge_v), length(light.edge_u - light.edge_v));
     const Vertex<T> to = centre - p.point;
@@ -324,10 +330,6 @@ template <class T>
     return p.shininess >= T(4) && y <= (order == 4 ? T(1.5) : T(1)) ? order : 0;
 }
 
-} // namespace detail
-
-namespace detail {
-
 /// §7 for an area light from its sums over samples (or quadrature nodes): kd·Σ(N·L)·object +
 /// ks·Σ(highlight)·highlight colour, times the light's colour and `scale` (1/n, or a weight).
 template <class T>
@@ -344,7 +346,7 @@ template <class T>
 [[nodiscard]] T corner_vote(const RectLight<T>& light, const LitPoint<T>& p, const T* seen, bool& agree) noexcept {
     T corner = T(-1);
     for (int c = 0; c < 4; ++c) {
-        if (!(dot(p.N, light_corner(light, c) - p.point) > T(0))) continue;
+        if (!above_horizon(light, p, c)) continue;
         if (corner < T(0)) corner = seen[c];
         agree = agree && seen[c] == corner;
     }
