@@ -387,11 +387,14 @@ void quadrature_sums(LightSampleChunk<T>& batch, const RectLight<T>& light, cons
 /// included (§9), estimated from s.samples stratified samples seeded by `seed`: the colour it adds
 /// to p's local colour. Shadow rays go to `scene` as a stream (occluded, or transmittance unless
 /// s.opaque); `shadow_rays` counts them. With s.adaptive (and 8 samples or more) the shadow rays
-/// to the rectangle's four corners are traced first, then, from 64 samples on, those to the probe
-/// samples (the samples in even columns and rows of the strata, a quarter); when all agree the other
-/// samples take their value without rays (as POV-Ray's adaptive area lights): exact outside
-/// penumbrae, but an occluder that hides none or all of the corners and probes and not the rest
-/// from p is missed (the probes, spread over the rectangle, make that rarer as samples grow).
+/// to the rectangle's four corners are traced first. From 64 samples on, where all of them see the
+/// light and nothing may meet the shaft from p to it (Scene::shaft_clear), every sample sees it:
+/// exact, without more rays. Elsewhere (and from 64 samples on only there) the shadow rays to the
+/// probe samples (the samples in even columns and rows of the strata, a quarter) follow; when all
+/// agree the other samples take their value without rays (as POV-Ray's adaptive area lights):
+/// exact outside penumbrae, but an occluder that hides none or all of the corners and probes and
+/// not the rest from p is missed (the probes, spread over the rectangle, make that rarer as
+/// samples grow; below 64 samples the corners alone decide).
 /// Corners below p's horizon do not vote (their rays meet p's own surface; they add nothing).
 /// Where they agree that the whole light is seen and its term is smooth over it
 /// (detail::smooth_order), the mean comes from a 3 × 3 or 4 × 4 Gauss–Legendre rule, not the samples.
@@ -494,8 +497,8 @@ template <class T, class SceneT>
     if (!corners_first(LightSampling{n, s.adaptive, s.shadows, s.opaque})) {
         shade(T(-1));
     } else {
-        // §9: shadow rays to the rectangle's four corners first, then (64 samples on) to a quarter of them;
-        // where all agree, the rest take their value (exact for one straight occluding edge).
+        // §9: shadow rays to the four corners first; from 64 samples, where they see the light, a clear shaft
+        // (exact) or else the probes (a quarter) must agree; then the rest take their value.
         if (corners) {
             for (int c = 0; c < 4; ++c) seen[c] = corners[c];
         } else {
@@ -506,7 +509,8 @@ template <class T, class SceneT>
         bool agree = true;
         const T corner = detail::corner_vote(light, p, seen, agree);
         if (corner < T(0)) return {T(0), T(0), T(0)}; // §7: the whole light below p's horizon
-        agree = agree && (n < probe_from || probe_agrees(corner));
+        if (agree && n >= probe_from && !(corner == T(1) && scene.shaft_clear(p.from, light)))
+            agree = probe_agrees(corner);
         if (agree && corner == T(0)) return {T(0), T(0), T(0)}; // umbra: every sample shadowed
         if (agree)
             if (const int order = detail::smooth_order(light, p, highlight, min_cos, n)) {

@@ -30,6 +30,7 @@
 
 #include "batch.hpp"
 #include "bvh.hpp"
+#include "bvh/shaft.hpp"
 #include "color.hpp"
 #include "detail/attributes.hpp"
 #include "detail/compiled.hpp"
@@ -290,6 +291,14 @@ public:
     /// How many times the ray crosses the placed meshes, the triangle kinds and the spheres with t
     /// in (0, t_max), each mesh's shared edges and vertices once: even from outside closed ones.
     [[nodiscard]] std::size_t count_hits(const Ray<T>& ray, T t_max = std::numeric_limits<T>::infinity()) const;
+    /// The part of a shaft near its point that shaft_clear leaves out: the first 2⁻¹⁰ of the way.
+    static constexpr T shaft_tip = T(1) / T(1024);
+    /// Whether nothing the Scene holds can meet the shaft from `from` to `light`'s parallelogram
+    /// (the convex hull of `from` and its corners), less its tip (the first shaft_tip of the way,
+    /// where the surface `from` lies on is): then no shadow ray from `from` to the light is blocked.
+    /// Conservative (Haines & Wallace's shaft culling, bvh/shaft.hpp): false where unsure, and for
+    /// kinds without bounds, a non-finite `from` or light.
+    [[nodiscard]] bool shaft_clear(const Vertex<T>& from, const RectLight<T>& light) const;
 
     /// Point, normals, material, texture coordinates and colour of a hit of `ray`.
     [[nodiscard]] SurfacePoint<T> surface(const Ray<T>& ray, const Hit<T>& hit) const;
@@ -436,6 +445,10 @@ private:
     /// The crossings of kind `kind`'s objects with t in (0, t_max).
     template <class Kind, class Objects>
     std::size_t count_hits_of_kind(Kind kind, const Objects& vec, const Ray<T>& ray, T t_max) const noexcept;
+    // Shafts (scene/shaft.hpp).
+    /// Whether any of kind `kind`'s objects may meet the shaft.
+    template <class Kind, class Objects>
+    [[nodiscard]] bool kind_meets_shaft(Kind kind, const Objects& vec, const detail::Shaft<T>& shaft) const noexcept;
 
     // Streams of rays (scene/stream.hpp).
     /// The rays of a stream given as one array: read in place (the other forms are copied).
@@ -675,6 +688,7 @@ inline Box<T> Scene<T, Shapes...>::world_box(const Box<T>& b, const Transform<T>
 #include "scene/stream.hpp"
 #include "scene/closest_point.hpp"
 #include "scene/count_hits.hpp"
+#include "scene/shaft.hpp"
 
 // StandardScene's members come from isin::io where ISIN_COMPILED is defined (detail/compiled.hpp).
 #if defined(ISIN_COMPILED)
