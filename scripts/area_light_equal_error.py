@@ -3,8 +3,8 @@
 The error is light_rms_levels: against the same pixel samples with the reference's light
 samples, so that only the light sampling's noise and bias count. For each scene, pixel samples
 and uniform light-sample count from 16 on: uniform's error and time, and the time adaptive
-sampling needs for the same error (log-log interpolation between its renders at 4, 16, 64 and
-256 light samples, 4 being uniform's render; '>' where its renders do not reach it).
+sampling needs for the same error (log-log interpolation between its renders at 4, 16, 64, …
+light samples, 4 being uniform's render; '>' where its renders do not reach it).
 Prints a Markdown table. Usage: python3 scripts/area_light_equal_error.py docs/area_lights.csv
 """
 import csv
