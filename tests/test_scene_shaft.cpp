@@ -104,6 +104,12 @@ TEST_CASE_TEMPLATE("Scene::shaft_clear: an occluder that no corner ray meets, on
         CHECK_FALSE(scene.occluded(isin::Ray<T>{from, q - from}, T(1)));
     }
     CHECK_FALSE(scene.shaft_clear(from, light));
+    // A light so far and large that the sides' normals overflow: never separated by them.
+    const T far = T(1e20);
+    const isin::RectLight<T> huge{{-far, far, -far}, {2 * far, 0, 0}, {0, 0, 2 * far}, {1, 1, 1}};
+    scene.add(isin::Sphere<T>{{0, T(1e19), 0}, T(1e17)}, m); // beyond the tip (2⁻¹⁰ of the way)
+    scene.commit();
+    CHECK_FALSE(scene.shaft_clear({0, 0, 0}, huge)); // that ball is in the way
     // Non-finite input: not clear.
     const T nan = std::numeric_limits<T>::quiet_NaN();
     CHECK_FALSE(scene.shaft_clear({nan, 0, 0}, light));

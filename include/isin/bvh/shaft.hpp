@@ -62,8 +62,10 @@ struct Shaft {
                 const T d = s.n[a][0] * s.x[0][k] + s.n[a][1] * s.x[1][k] + s.n[a][2] * s.x[2][k];
                 low = std::min(low, d), high = std::max(high, d);
             }
-            const T slack = s.reach(a, s.magnitude);
-            s.lo[a] = low - slack, s.hi[a] = high + slack;
+            // Rounding in these projections, and the corners' own error along the axis.
+            const T slack = s.reach(a, s.magnitude) + std::fabs(s.n[a][0]) * error[0] +
+                            std::fabs(s.n[a][1]) * error[1] + std::fabs(s.n[a][2]) * error[2];
+            s.lo[a] = low - slack, s.hi[a] = high + slack; // NaN where a product overflowed: never separates
         }
         s.usable = true;
         return s;
@@ -89,7 +91,7 @@ struct Shaft {
             const T c = n[a][0] * centre[0] + n[a][1] * centre[1] + n[a][2] * centre[2];
             const T e = std::fabs(n[a][0]) * half[0] + std::fabs(n[a][1]) * half[1] + std::fabs(n[a][2]) * half[2];
             const T slack = reach(a, m);
-            if (!(c - e <= hi[a] + slack && c + e >= lo[a] - slack)) return false;
+            if (c - e > hi[a] + slack || c + e < lo[a] - slack) return false; // NaN: no separation
         }
         return true;
     }
