@@ -312,8 +312,8 @@ double unshadowed_mean(const isin::RectLight<T>& light, const isin::LitPoint<T>&
 }
 } // namespace
 
-TEST_CASE_TEMPLATE("rect_light_term: where the corners see the whole light, Gauss–Legendre gives its mean", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("rect_light_term: where the corners see the whole light, Gauss–Legendre gives its mean", T, float,
+                   double) {
     const FloorScene<T> fs(false);
     int smooth = 0, rough = 0;
     for (int samples : {16, 64, 256})
@@ -334,7 +334,8 @@ TEST_CASE_TEMPLATE("rect_light_term: where the corners see the whole light, Gaus
             const auto adaptive = isin::rect_light_term(fs.scene, fs.light, p, isin::light_seed(P, 0), s, rays);
             CAPTURE(samples);
             CAPTURE(i);
-            CHECK(rays == 4u); // the corners only: from 64 samples the shaft to the light is clear (the floor is below it)
+            CHECK(rays ==
+                  4u); // the corners only: from 64 samples the shaft to the light is clear (the floor is below it)
             if (order == 0) {
                 ++rough;
                 s.adaptive = false; // no quadrature: the samples, as uniform shades them where all are lit

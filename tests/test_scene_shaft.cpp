@@ -30,8 +30,9 @@ struct ShaftScene {
         for (int i = 0; i < 12; ++i) scene.add(isin::Sphere<T>{{T(u(rng)), T(u(rng)), T(u(rng))}, T(r(rng))}, material);
         for (int i = 0; i < 6; ++i) {
             const isin::Vertex<T> a{T(u(rng)), T(u(rng)), T(u(rng))};
-            scene.add(isin::Triangle<T>{a, a + isin::Vertex<T>{T(1), T(0.2), T(0)}, a + isin::Vertex<T>{T(0), T(1), T(0.5)}},
-                      material);
+            scene.add(
+                isin::Triangle<T>{a, a + isin::Vertex<T>{T(1), T(0.2), T(0)}, a + isin::Vertex<T>{T(0), T(1), T(0.5)}},
+                material);
         }
         scene.commit();
     }
@@ -75,9 +76,9 @@ TEST_CASE_TEMPLATE("Scene::shaft_clear: a clear shaft lets every ray beyond its 
     CAPTURE(clear);
     CAPTURE(blocked);
     CAPTURE(unsure);
-    CHECK(clear > 300);          // not vacuous: many shafts are certified (409 of 600)
-    CHECK(blocked > 100);        // and the scene is in the way of many (170)
-    CHECK(unsure < 60);          // conservative answers are the few (21): edge × edge axes left out
+    CHECK(clear > 300);   // not vacuous: many shafts are certified (409 of 600)
+    CHECK(blocked > 100); // and the scene is in the way of many (170)
+    CHECK(unsure < 60);   // conservative answers are the few (21): edge × edge axes left out
 }
 
 TEST_CASE_TEMPLATE("Scene::shaft_clear: an occluder that no corner ray meets, on a floor point's offset origin", T,

@@ -24,10 +24,10 @@ namespace detail {
 template <class T>
 struct Shaft {
     static constexpr int axes = 8;
-    T n[axes][3];     // the axes (the end faces' normal and the sides' need not be unit)
+    T n[axes][3]; // the axes (the end faces' normal and the sides' need not be unit)
     T lo[axes], hi[axes];
-    T x[3][8];        // the corners, axis by axis
-    T magnitude[3];   // per coordinate, the largest |corner| with the error of placing the corners
+    T x[3][8];      // the corners, axis by axis
+    T magnitude[3]; // per coordinate, the largest |corner| with the error of placing the corners
     bool usable = false;
 
     /// The hull of corners v[0 … 3] (the near end, a parallelogram: p, p + u, p + v, p + u + v)
@@ -75,8 +75,7 @@ struct Shaft {
     /// m[0 … 2] in magnitude (16 ε: the three products, their sum and the corners' own error).
     [[nodiscard]] T reach(int a, const T (&m)[3]) const noexcept {
         constexpr T eps = std::numeric_limits<T>::epsilon();
-        return T(16) * eps *
-               (std::fabs(n[a][0]) * m[0] + std::fabs(n[a][1]) * m[1] + std::fabs(n[a][2]) * m[2]);
+        return T(16) * eps * (std::fabs(n[a][0]) * m[0] + std::fabs(n[a][1]) * m[1] + std::fabs(n[a][2]) * m[2]);
     }
 
     /// Whether the box [lo, hi] may meet the hull (an empty or NaN box does not).
@@ -108,7 +107,7 @@ struct Shaft {
         }
         const Vertex<T> normal = cross(p1 - p0, p2 - p0);
         const T w[3] = {normal.x, normal.y, normal.z};
-        const auto project = [&](const T (&axis)[3], const Vertex<T>& p) {
+        const auto project = [&](const T(&axis)[3], const Vertex<T>& p) {
             return axis[0] * p.x + axis[1] * p.y + axis[2] * p.z;
         };
         constexpr T eps = std::numeric_limits<T>::epsilon();

@@ -18,7 +18,8 @@ inline bool Scene<T, Shapes...>::shaft_clear(const Vertex<T>& from, const RectLi
     prepare();
     Vertex<T> v[8]; // the near end (the tip cut off), then the light's corners
     for (int c = 0; c < 4; ++c) {
-        const Vertex<T> q = light.corner + ((c & 1) ? light.edge_u : Vertex<T>{}) + ((c & 2) ? light.edge_v : Vertex<T>{});
+        const Vertex<T> q =
+            light.corner + ((c & 1) ? light.edge_u : Vertex<T>{}) + ((c & 2) ? light.edge_v : Vertex<T>{});
         v[c] = from + shaft_tip * (q - from), v[4 + c] = q;
     }
     const T exact[3] = {T(0), T(0), T(0)};
@@ -68,7 +69,8 @@ inline bool Scene<T, Shapes...>::kind_meets_shaft(Kind kind, const Objects& vec,
     const auto& accel = std::get<kind>(accel_);
     if (vec.empty()) return false;
     if constexpr (is_triangle_kind<Shape>::value) {
-        if (accel.triangles) return detail::triangles_may_meet(accel.triangles->tree(), accel.triangles->blocks(), shaft);
+        if (accel.triangles)
+            return detail::triangles_may_meet(accel.triangles->tree(), accel.triangles->blocks(), shaft);
         for (const auto& object : vec) {
             const Triangle<T>& tri = *triangle_of(object.shape);
             if (!Bvh<T>::bounds(tri).usable()) continue; // as a Bvh: no zero-area or non-finite triangles
