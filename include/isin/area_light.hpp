@@ -135,12 +135,6 @@ struct LitPoint {
     Color<T> object, highlight;
 };
 
-/// Corner c (0 … 3) of a RectLight: corner, corner + edge_u, corner + edge_v, the far one.
-template <class T>
-[[nodiscard]] inline Vertex<T> light_corner(const RectLight<T>& light, int c) noexcept {
-    return light.corner + ((c & 1) ? light.edge_u : Vertex<T>{}) + ((c & 2) ? light.edge_v : Vertex<T>{});
-}
-
 /// How a RectLight is sampled at one point.
 struct LightSampling {
     int samples = 16; ///< stratified samples over the rectangle

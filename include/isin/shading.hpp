@@ -62,6 +62,12 @@ struct RectLight {
     Color<T> color{T(1), T(1), T(1)};
 };
 
+/// Corner c (0 … 3) of a RectLight: corner, corner + edge_u, corner + edge_v, the far one.
+template <class T>
+[[nodiscard]] inline Vertex<T> light_corner(const RectLight<T>& light, int c) noexcept {
+    return light.corner + ((c & 1) ? light.edge_u : Vertex<T>{}) + ((c & 2) ? light.edge_v : Vertex<T>{});
+}
+
 /// Diffuse coefficient (§7): N·L for unit N and L (L from the point to the light); negative → 0.
 template <class T>
 [[nodiscard]] constexpr T diffuse_coefficient(const Vertex<T>& N, const Vertex<T>& L) noexcept {

@@ -18,8 +18,7 @@ inline bool Scene<T, Shapes...>::shaft_clear(const Vertex<T>& from, const RectLi
     prepare();
     Vertex<T> v[8]; // the near end (the tip cut off), then the light's corners
     for (int c = 0; c < 4; ++c) {
-        const Vertex<T> q =
-            light.corner + ((c & 1) ? light.edge_u : Vertex<T>{}) + ((c & 2) ? light.edge_v : Vertex<T>{});
+        const Vertex<T> q = light_corner(light, c);
         v[c] = from + shaft_tip * (q - from), v[4 + c] = q;
     }
     const T exact[3] = {T(0), T(0), T(0)};
