@@ -238,6 +238,61 @@ TEST_CASE_TEMPLATE("rect_light_term: from 64 samples, adaptive probes find an oc
     CHECK(std::abs(adaptive_sum - uniform_sum) < 0.01 * uniform_sum);
 }
 
+TEST_CASE("strata_in_order: every stratum once; 16 in a row fill a 4 × 4 square where the grid allows") {
+    const std::uint32_t grids[][2] = {{1, 1},  {4, 4},  {8, 8},  {16, 16}, {32, 32}, {64, 64}, {16, 8},
+                                      {8, 16}, {12, 4}, {4, 12}, {7, 3},   {5, 1},   {24, 8},  {10, 10}};
+    for (const auto& g : grids) {
+        const std::uint32_t gu = g[0], gv = g[1], n = gu * gv;
+        CAPTURE(gu);
+        CAPTURE(gv);
+        std::vector<int> visits(n, 0);
+        std::uint32_t column[64], row[64];
+        bool squares = true;
+        for (std::uint32_t t0 = 0; t0 < n; t0 += 64) {
+            const int count = int(std::min<std::uint32_t>(64, n - t0));
+            isin::detail::strata_in_order(gu, gv, t0, count, column, row);
+            for (int k = 0; k < count; ++k) {
+                REQUIRE(column[k] < gu);
+                REQUIRE(row[k] < gv);
+                ++visits[column[k] + row[k] * gu];
+            }
+            for (int k = 0; k + 16 <= count; k += 16) { // a packet's strata: within 4 × 4
+                const auto [i_lo, i_hi] = std::minmax_element(column + k, column + k + 16);
+                const auto [j_lo, j_hi] = std::minmax_element(row + k, row + k + 16);
+                squares = squares && *i_hi - *i_lo == 3 && *j_hi - *j_lo == 3;
+            }
+        }
+        CHECK(std::count(visits.begin(), visits.end(), 1) == int(n));
+        if (gu % 4 == 0 && gv % 4 == 0) CHECK(squares);
+    }
+}
+
+TEST_CASE_TEMPLATE("rect_light_term: a penumbra found by the probes reuses all of them, up to 1,024 samples", T, float,
+                   double) {
+    FloorScene<T> fs(false);
+    isin::Material<T> white;
+    const auto m = fs.scene.add_material(white);
+    // The bar of the test above: under it the corners see the light and the probes disagree.
+    fs.scene.add(isin::Triangle<T>{{-1, 10, -500}, {-1, 10, 900}, {1, 10, -500}}, m);
+    fs.scene.add(isin::Triangle<T>{{1, 10, 900}, {1, 10, -500}, {-1, 10, 900}}, m);
+    const isin::Vertex<T> P{T(0.3), fs.floor_y, T(60)};
+    const isin::LitPoint<T> p{
+        P, P + isin::Vertex<T>{0, T(1e-3), 0}, {0, 1, 0}, {0, 1, 0}, T(1), T(0), T(1), {1, 1, 1}, {1, 1, 1}};
+    for (int samples : {64, 256, 1024}) {
+        CAPTURE(samples);
+        isin::LightSampling s;
+        s.samples = samples;
+        std::uint64_t adaptive_rays = 0, uniform_rays = 0;
+        const auto seed = isin::light_seed(P, 0);
+        const auto adaptive = isin::rect_light_term(fs.scene, fs.light, p, seed, s, adaptive_rays);
+        s.adaptive = false;
+        const auto uniform = isin::rect_light_term(fs.scene, fs.light, p, seed, s, uniform_rays);
+        CHECK(uniform_rays == std::uint64_t(samples));
+        CHECK(adaptive_rays == std::uint64_t(samples) + 4u); // the corners, then each sample once
+        CHECK(adaptive.r == doctest::Approx(double(uniform.r)).epsilon(1e-5));
+    }
+}
+
 TEST_CASE_TEMPLATE("RectLight renders: the same pixels on 1 and 2 threads, in bands, and as trace() gives them", T,
                    float, double) {
     FloorScene<T> fs(true);
