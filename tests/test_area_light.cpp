@@ -70,6 +70,17 @@ std::vector<double> errors(const FloorScene<T>& fs, int w, int h, const isin::Re
     return out;
 }
 
+// FloorScene with a bar 2 wide along z at y = 10 under the light's middle: from the floor below it
+// hides a strip of the light across its whole depth, and none of its corners.
+template <class T>
+struct BarScene : FloorScene<T> {
+    BarScene() : FloorScene<T>(false) {
+        const auto m = this->scene.add_material(isin::Material<T>{});
+        this->scene.add(isin::Triangle<T>{{-1, 10, -500}, {-1, 10, 900}, {1, 10, -500}}, m);
+        this->scene.add(isin::Triangle<T>{{1, 10, 900}, {1, 10, -500}, {-1, 10, 900}}, m);
+    }
+};
+
 struct Summary {
     double mean = 0, rms = 0, worst = 0;
     std::size_t n = 0;
@@ -206,13 +217,7 @@ TEST_CASE_TEMPLATE("rect_light_term: the penumbra's RMS error falls at least as 
 
 TEST_CASE_TEMPLATE("rect_light_term: from 64 samples, adaptive probes find an occluder that hides no corner", T, float,
                    double) {
-    FloorScene<T> fs(false);
-    isin::Material<T> white;
-    const auto m = fs.scene.add_material(white);
-    // A bar 2 wide along z at y = 10 under the light's middle: from the floor below it hides a
-    // strip of the light across its whole depth, and none of its corners.
-    fs.scene.add(isin::Triangle<T>{{-1, 10, -500}, {-1, 10, 900}, {1, 10, -500}}, m);
-    fs.scene.add(isin::Triangle<T>{{1, 10, 900}, {1, 10, -500}, {-1, 10, 900}}, m);
+    const BarScene<T> fs;
     int same = 0;
     double adaptive_sum = 0, uniform_sum = 0, open_sum = 0;
     const int points = 64;
@@ -269,12 +274,7 @@ TEST_CASE("strata_in_order: every stratum once; 16 in a row fill a 4 × 4 square
 
 TEST_CASE_TEMPLATE("rect_light_term: a penumbra found by the probes reuses all of them, up to 1,024 samples", T, float,
                    double) {
-    FloorScene<T> fs(false);
-    isin::Material<T> white;
-    const auto m = fs.scene.add_material(white);
-    // The bar of the test above: under it the corners see the light and the probes disagree.
-    fs.scene.add(isin::Triangle<T>{{-1, 10, -500}, {-1, 10, 900}, {1, 10, -500}}, m);
-    fs.scene.add(isin::Triangle<T>{{1, 10, 900}, {1, 10, -500}, {-1, 10, 900}}, m);
+    const BarScene<T> fs; // under the bar the corners see the light and the probes disagree
     const isin::Vertex<T> P{T(0.3), fs.floor_y, T(60)};
     const isin::LitPoint<T> p{
         P, P + isin::Vertex<T>{0, T(1e-3), 0}, {0, 1, 0}, {0, 1, 0}, T(1), T(0), T(1), {1, 1, 1}, {1, 1, 1}};
