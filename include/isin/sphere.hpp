@@ -1,5 +1,6 @@
 #pragma once
 /// isin — spheres and the geometric ray–sphere test of note §6.
+#include <cmath>
 #include <limits>
 
 #include "detail/attributes.hpp"
@@ -113,6 +114,44 @@ template <class T>
     return p;
 }
 
+namespace detail {
+/// §6's steps for a ray and a sphere, in units of |Rd|² = a (any non-zero direction; 1 for the
+/// note's unit Rd): l = C − Ro, the closest approach s = l·Rd/a, l2 = l·l, r2 = r²; `ok` is false
+/// for a zero, infinite or NaN direction or radius (nothing is met).
+template <class T>
+struct SphereApproach {
+    Vertex<T> l;
+    T inv_a = T(0), s = T(0), l2 = T(0), r2 = T(0);
+    bool ok = false;
+    /// §6: m2 = l2 − s², computed as |l − s·Rd|² (Ray Tracing Gems ch. 7): the squared distance
+    /// from C to the ray's line, without l2 − s²'s cancellation far from a small sphere.
+    [[nodiscard]] T squared_miss(const Vertex<T>& Rd) const noexcept {
+        const Vertex<T> m = l - s * Rd;
+        return dot(m, m);
+    }
+    /// §6: q = √(r2 − m2), half the chord (the roots are s ± q), where m2 ≤ r2.
+    [[nodiscard]] T half_chord(T m2) const noexcept { return std::sqrt((r2 - m2) * inv_a); }
+    /// The product of the roots, t_near · t_far = (l2 − r2)/a: the root that would cancel as it over the other.
+    [[nodiscard]] T root_product() const noexcept { return (l2 - r2) * inv_a; }
+};
+
+template <class T>
+[[nodiscard]] inline SphereApproach<T> sphere_approach(const Ray<T>& ray, const Sphere<T>& sp) noexcept {
+    SphereApproach<T> h;
+    const Vertex<T>& Rd = ray.direction;
+    const T a = dot(Rd, Rd);
+    if (!(a > T(0)) || !(a < std::numeric_limits<T>::infinity())) return h;
+    if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return h;
+    h.inv_a = T(1) / a;
+    h.l = sp.center - ray.origin; // §6: l = C − Ro
+    h.s = dot(h.l, Rd) * h.inv_a; // §6: s = l·Rd (closest approach)
+    h.l2 = dot(h.l, h.l);         // §6: l2 = l·l
+    h.r2 = sp.radius * sp.radius; // §6: r2 = r²
+    h.ok = true;
+    return h;
+}
+} // namespace detail
+
 /// Geometric ray–sphere test of note §6, isin's default. Nearest hit with t > 0, t in units of
 /// |direction| (any non-zero direction works; the note's unit Rd gives its numbers exactly).
 /// Departures from the note, each for accuracy:
@@ -125,29 +164,20 @@ template <class T>
 ///   t_near · t_far = (l2 − r2) / |Rd|².
 template <class T>
 [[nodiscard]] inline Hit<T> intersect(const Ray<T>& ray, const Sphere<T>& sp) noexcept {
-    const Vertex<T>& Rd = ray.direction;
-    const T a = dot(Rd, Rd);
-    if (!(a > T(0)) || !(a < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
-    if (!(sp.radius > T(0)) || !(sp.radius < std::numeric_limits<T>::infinity())) return Hit<T>::miss();
-    const T inv_a = T(1) / a;                       // 1 for the note's unit Rd
-    const Vertex<T> l = sp.center - ray.origin;     // §6: l = C − Ro
-    const T s = dot(l, Rd) * inv_a;                 // §6: s = l·Rd (closest approach)
-    const T l2 = dot(l, l);                         // §6: l2 = l·l
-    const T r2 = sp.radius * sp.radius;             // §6: r2 = r²
-    if (s < T(0) && l2 > r2) return Hit<T>::miss(); // §6: behind an outside (or leaving) origin
-    const Vertex<T> m = l - s * Rd;
-    const T m2 = dot(m, m);                   // §6: m2 = l2 − s², as |l − s·Rd|² (RTG 7)
-    if (!(m2 <= r2)) return Hit<T>::miss();   // §6: m2 > r2 → passes aside; NaN → miss
-    const T q = std::sqrt((r2 - m2) * inv_a); // §6: q = √(r2 − m2)
-    const T c = (l2 - r2) * inv_a;            // t_near · t_far
+    const detail::SphereApproach<T> h = detail::sphere_approach(ray, sp);
+    if (!h.ok) return Hit<T>::miss();
+    if (h.s < T(0) && h.l2 > h.r2) return Hit<T>::miss(); // §6: behind an outside (or leaving) origin
+    const T m2 = h.squared_miss(ray.direction);
+    if (!(m2 <= h.r2)) return Hit<T>::miss(); // §6: m2 > r2 → passes aside; NaN → miss
+    const T q = h.half_chord(m2), c = h.root_product();
     T t;
-    if (std::fabs(l2 - r2) <= surface_band(sp, l2)) { // §8 fix, scale-relative: on the surface
-        if (!(s > T(0))) return Hit<T>::miss();       // leaving the sphere: no self-hit
-        t = s + q;                                    // entering: the far side
-    } else if (l2 > r2) {                             // §6: origin outside (s ≥ 0 here)
-        t = c / (s + q);                              // §6: t = s − q, without cancellation
+    if (std::fabs(h.l2 - h.r2) <= surface_band(sp, h.l2)) { // §8 fix, scale-relative: on the surface
+        if (!(h.s > T(0))) return Hit<T>::miss();           // leaving the sphere: no self-hit
+        t = h.s + q;                                        // entering: the far side
+    } else if (h.l2 > h.r2) {                               // §6: origin outside (s ≥ 0 here)
+        t = c / (h.s + q);                                  // §6: t = s − q, without cancellation
     } else {
-        t = s >= T(0) ? s + q : c / (s - q); // §6: origin inside → t = s + q
+        t = h.s >= T(0) ? h.s + q : c / (h.s - q); // §6: origin inside → t = s + q
     }
     return t > T(0) && t < std::numeric_limits<T>::infinity() ? Hit<T>::at(t) : Hit<T>::miss();
 }

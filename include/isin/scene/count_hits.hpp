@@ -21,17 +21,13 @@ namespace detail {
 /// |Ro + t·Rd − C|² = r² (§6's s ± q), 0 for a ray that only touches it (q = 0) or misses.
 template <class T>
 [[nodiscard]] std::size_t sphere_crossings(const Ray<T>& ray, const Sphere<T>& sp, T t_max) noexcept {
-    const Vertex<T>& Rd = ray.direction;
-    const T a = dot(Rd, Rd), r2 = sp.radius * sp.radius;
-    if (!(a > T(0)) || !(a < std::numeric_limits<T>::infinity()) || !(r2 > T(0))) return 0;
-    const Vertex<T> l = sp.center - ray.origin; // §6: l = C − Ro
-    const T s = dot(l, Rd) / a;                 // §6: s = l·Rd
-    const Vertex<T> m = l - s * Rd;
-    const T m2 = dot(m, m);                                       // §6: m2 = l2 − s², as |l − s·Rd|² (RTG 7)
-    if (!(m2 < r2)) return 0;                                     // §6: passes aside (or only touches); NaN: none
-    const T q = std::sqrt((r2 - m2) / a);                         // §6: q = √(r2 − m2)
-    const T c = (dot(l, l) - r2) / a;                             // t_near · t_far
-    const T t_far = s + q, t_near = s > T(0) ? c / t_far : s - q; // §6: s − q, without cancellation
+    const SphereApproach<T> h = sphere_approach(ray, sp);
+    if (!h.ok) return 0;
+    const T m2 = h.squared_miss(ray.direction);
+    if (!(m2 < h.r2)) return 0; // §6: passes aside (or only touches); NaN: none
+    const T q = h.half_chord(m2);
+    const T t_far = h.s + q,
+            t_near = h.s > T(0) ? h.root_product() / t_far : h.s - q; // §6: s − q, without cancellation
     return std::size_t(t_near > T(0) && t_near < t_max) + std::size_t(t_far > T(0) && t_far < t_max);
 }
 
