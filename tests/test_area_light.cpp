@@ -243,33 +243,38 @@ TEST_CASE_TEMPLATE("rect_light_term: from 64 samples, adaptive probes find an oc
     CHECK(std::abs(adaptive_sum - uniform_sum) < 0.01 * uniform_sum);
 }
 
-TEST_CASE("strata_in_order: every stratum once; 16 in a row fill a 4 × 4 square where the grid allows") {
+TEST_CASE("StrataWalk: every stratum once; 16 in a row fill a 4 × 4 square where the grid allows") {
     const std::uint32_t grids[][2] = {{1, 1},  {4, 4},  {8, 8},  {16, 16}, {32, 32}, {64, 64}, {16, 8},
                                       {8, 16}, {12, 4}, {4, 12}, {7, 3},   {5, 1},   {24, 8},  {10, 10}};
-    for (const auto& g : grids) {
-        const std::uint32_t gu = g[0], gv = g[1], n = gu * gv;
-        CAPTURE(gu);
-        CAPTURE(gv);
-        std::vector<int> visits(n, 0);
-        std::uint32_t column[64], row[64];
-        bool squares = true;
-        for (std::uint32_t t0 = 0; t0 < n; t0 += 64) {
-            const int count = int(std::min<std::uint32_t>(64, n - t0));
-            isin::detail::strata_in_order(gu, gv, t0, count, column, row);
-            for (int k = 0; k < count; ++k) {
-                REQUIRE(column[k] < gu);
-                REQUIRE(row[k] < gv);
-                ++visits[column[k] + row[k] * gu];
+    for (const auto& g : grids)
+        for (std::uint32_t step : {1u, 2u}) {
+            const std::uint32_t gu = g[0], gv = g[1], n = gu * gv;
+            CAPTURE(gu);
+            CAPTURE(gv);
+            CAPTURE(step);
+            std::vector<int> visits(n, 0);
+            std::uint32_t column[64], row[64];
+            bool squares = true;
+            isin::detail::StrataWalk walk(gu, gv, step, step);
+            for (std::uint32_t t0 = 0; t0 < n; t0 += 64) {
+                const int count = int(std::min<std::uint32_t>(64, n - t0));
+                walk.next(count, column, row);
+                for (int k = 0; k < count; ++k) {
+                    REQUIRE(column[k] % step == 0);
+                    REQUIRE(row[k] % step == 0);
+                    REQUIRE(column[k] / step < gu);
+                    REQUIRE(row[k] / step < gv);
+                    ++visits[column[k] / step + row[k] / step * gu];
+                }
+                for (int k = 0; k + 16 <= count; k += 16) { // a packet's strata: within 4 × 4 of the grid
+                    const auto [i_lo, i_hi] = std::minmax_element(column + k, column + k + 16);
+                    const auto [j_lo, j_hi] = std::minmax_element(row + k, row + k + 16);
+                    squares = squares && *i_hi - *i_lo == 3 * step && *j_hi - *j_lo == 3 * step;
+                }
             }
-            for (int k = 0; k + 16 <= count; k += 16) { // a packet's strata: within 4 × 4
-                const auto [i_lo, i_hi] = std::minmax_element(column + k, column + k + 16);
-                const auto [j_lo, j_hi] = std::minmax_element(row + k, row + k + 16);
-                squares = squares && *i_hi - *i_lo == 3 && *j_hi - *j_lo == 3;
-            }
+            CHECK(std::count(visits.begin(), visits.end(), 1) == int(n));
+            if (gu % 4 == 0 && gv % 4 == 0) CHECK(squares);
         }
-        CHECK(std::count(visits.begin(), visits.end(), 1) == int(n));
-        if (gu % 4 == 0 && gv % 4 == 0) CHECK(squares);
-    }
 }
 
 TEST_CASE_TEMPLATE("rect_light_term: a penumbra found by the probes reuses all of them, up to 1,024 samples", T, float,

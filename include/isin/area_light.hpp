@@ -195,39 +195,48 @@ void shadow_visibility(const SceneT& scene, const Ray<T>* rays, std::size_t coun
     }
 }
 
-/// The strata of a gu × gv grid that a walk over it visits t0-th … (t0 + count − 1)-th (t0 a multiple
-/// of 64, count ≤ 64), into column[] and row[]: by 8 × 8 blocks of four 4 × 4 tiles where gu and gv
-/// are multiples of 8, by 4 × 4 tiles where they are multiples of 4, else row by row. So the 16
-/// consecutive shadow rays of a stream's packet go to a square patch of the light, and two in a
-/// row to a 8 × 4 one: the packets' bundles are narrower than rows across the light (on the
-/// knot of benchmarks/area_lights, 256 samples, 18-26% less time than rows).
-inline void strata_in_order(std::uint32_t gu, std::uint32_t gv, std::uint32_t t0, int count, std::uint32_t* column,
-                            std::uint32_t* row) noexcept {
-    if (gu % 8 == 0 && gv % 8 == 0) {
-        const std::uint32_t block = t0 / 64, i0 = block % (gu / 8) * 8, j0 = block / (gu / 8) * 8;
-        for (int k = 0; k < count; ++k) {
-            const auto w = std::uint32_t(k);
-            column[k] = i0 + (w >> 4 & 1u) * 4 + (w & 3u), row[k] = j0 + (w >> 5) * 4 + (w >> 2 & 3u);
+/// A walk over a u × v grid of strata (every step_u-th column and step_v-th row of a light's
+/// strata), `size` at a time: by 8 × 8 blocks of four 4 × 4 tiles where u and v are multiples of
+/// 8, by 4 × 4 tiles where they are multiples of 4, else row by row. So the 16 consecutive shadow
+/// rays of a stream's packet go to a square patch of the light, and two in a row to an 8 × 4 one:
+/// bundles narrower than rows across the light (on the knot of benchmarks/area_lights, 256
+/// samples, 21-29% less time). Counted on from call to call, without divisions.
+struct StrataWalk {
+    std::uint32_t u, v, step_u, step_v;
+    std::uint32_t side;         // 8, 4 or 1: the blocks' or tiles' side, or row by row
+    std::uint32_t i = 0, j = 0; // the next block's, tile's or stratum's first column and row
+
+    StrataWalk(std::uint32_t grid_u, std::uint32_t grid_v, std::uint32_t every_u = 1,
+               std::uint32_t every_v = 1) noexcept
+        : u(grid_u), v(grid_v), step_u(every_u), step_v(every_v), side(grid_u % 8 == 0 && grid_v % 8 == 0   ? 8u
+                                                                       : grid_u % 4 == 0 && grid_v % 4 == 0 ? 4u
+                                                                                                            : 1u) {}
+
+    /// The next `count` strata (at most 64, and 64 but for the last call) into column[] and row[],
+    /// in the light's strata (the grid's scaled by the steps).
+    void next(int count, std::uint32_t* column, std::uint32_t* row) noexcept {
+        if (side == 1) {
+            for (int k = 0; k < count; ++k) {
+                column[k] = i * step_u, row[k] = j * step_v;
+                if (++i == u) i = 0, ++j;
+            }
+            return;
         }
-    } else if (gu % 4 == 0 && gv % 4 == 0) {
-        for (int k = 0; k < count; k += 16) {
-            const std::uint32_t tile = t0 / 16 + std::uint32_t(k) / 16, i0 = tile % (gu / 4) * 4,
-                                j0 = tile / (gu / 4) * 4;
-            for (int w = 0; w < 16 && k + w < count; ++w)
-                column[k + w] = i0 + std::uint32_t(w & 3), row[k + w] = j0 + std::uint32_t(w >> 2);
-        }
-    } else {
-        std::uint32_t i = t0 % gu, j = t0 / gu;
-        for (int k = 0; k < count; ++k) {
-            column[k] = i, row[k] = j;
-            if (++i == gu) i = 0, ++j;
+        for (int k = 0; k < count; k += int(side * side)) { // a block (side 8) or tile (side 4)
+            const int end = std::min(count - k, int(side * side));
+            for (int w = 0; w < end; ++w)
+                column[k + w] = (i + within_u[w]) * step_u, row[k + w] = (j + within_v[w]) * step_v;
+            if ((i += side) == u) i = 0, j += side;
         }
     }
-}
 
-/// Every step_u-th column and step_v-th row of the strata: a u × v grid.
-struct StrataGrid {
-    std::uint32_t u, v, step_u, step_v;
+    // The place of stratum w of a block in it: its tile (bits 4 and 5 of w), then within the tile.
+    static constexpr std::uint32_t within_u[64] = {0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 4, 5, 6, 7, 4, 5,
+                                                   6, 7, 4, 5, 6, 7, 4, 5, 6, 7, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3,
+                                                   0, 1, 2, 3, 4, 5, 6, 7, 4, 5, 6, 7, 4, 5, 6, 7, 4, 5, 6, 7};
+    static constexpr std::uint32_t within_v[64] = {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3, 0, 0, 0, 0, 1, 1,
+                                                   1, 1, 2, 2, 2, 2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 6, 6, 6, 6,
+                                                   7, 7, 7, 7, 4, 4, 4, 4, 5, 5, 5, 5, 6, 6, 6, 6, 7, 7, 7, 7};
 };
 
 /// A chunk of an area light's samples at one shading point, shaded a register at a time: their
@@ -241,26 +250,17 @@ struct LightSampleChunk {
         through[size];
     std::uint32_t column[size], row[size], index[size];
 
-    /// Places the samples of the strata visited t0-th … (t0 + m − 1)-th by strata_in_order over
-    /// a grid.u × grid.v grid of every grid.step_u-th column and grid.step_v-th row (t0 a multiple
-    /// of size), padded to `padded` lanes: their points q, N·L and Rf·V.
+    /// Places the samples of the next m strata of `walk` (StrataWalk::next), padded to `padded`
+    /// lanes: their points q, N·L and Rf·V.
     ISIN_DETAIL_INLINE void place(const RectLight<T>& light, const LitPoint<T>& p, const PatternSeeds& seeds,
-                                  std::uint32_t nu, std::uint32_t nv, T inv_n, const StrataGrid& grid, int t0, int m,
+                                  std::uint32_t nu, std::uint32_t nv, T inv_n, StrataWalk& walk, int m,
                                   int padded) noexcept {
-        strata_in_order(grid.u, grid.v, std::uint32_t(t0), m, column, row);
-        for (int k = 0; k < m; ++k) {
-            column[k] *= grid.step_u, row[k] *= grid.step_v;
+        walk.next(m, column, row);
+        for (int k = m; k < padded; ++k) column[k] = row[k] = 0; // past the last sample: any stratum
+        for (int k = 0; k < padded; ++k) {
             index[k] = column[k] + row[k] * nu;
+            sample_uv(seeds, nu, nv, column[k], row[k], index[k], inv_n, u[k], v[k]);
         }
-        place_listed(light, p, seeds, nu, nv, inv_n, m, padded);
-    }
-
-    /// Places the samples listed in index[0 … m − 1] (strata column[], row[]): their points q, N·L
-    /// and Rf·V, the same bits as place() gives them.
-    ISIN_DETAIL_INLINE void place_listed(const RectLight<T>& light, const LitPoint<T>& p, const PatternSeeds& seeds,
-                                         std::uint32_t nu, std::uint32_t nv, T inv_n, int m, int padded) noexcept {
-        for (int k = 0; k < m; ++k) sample_uv(seeds, nu, nv, column[k], row[k], index[k], inv_n, u[k], v[k]);
-        for (int k = m; k < padded; ++k) u[k] = v[k] = T(0.5);
         points(light, p, padded);
         for (int k = m; k < padded; ++k) n_dot_l[k] = T(0); // past the last sample
     }
@@ -324,8 +324,8 @@ struct ProbeRecord {
 
     ProbeRecord(std::uint32_t strata_u, std::uint32_t strata_v) noexcept
         : pu((strata_u + 1) / 2), pv(strata_v > 1 ? (strata_v + 1) / 2 : 1u), nv(strata_v) {}
-    /// The probes' grid within the strata.
-    [[nodiscard]] StrataGrid grid() const noexcept { return {pu, pv, 2u, nv > 1 ? 2u : 1u}; }
+    /// A walk over the probes.
+    [[nodiscard]] StrataWalk walk() const noexcept { return {pu, pv, 2u, nv > 1 ? 2u : 1u}; }
     /// Forgets every probe (none traced yet); returns how many there are.
     std::uint32_t start() noexcept {
         traced = true;
@@ -495,9 +495,10 @@ template <class T, class SceneT>
     };
     // Adds every sample's term, with its shadow ray or, where `assumed` ≥ 0, that visibility.
     const auto shade = [&](T assumed) {
+        detail::StrataWalk walk(nu, nv);
         for (int k0 = 0; k0 < n; k0 += chunk) {
             const int m = std::min(chunk, n - k0), padded = (m + W - 1) / W * W;
-            batch.place(light, p, seeds, nu, nv, inv_n, {nu, nv, 1u, 1u}, k0, m, padded);
+            batch.place(light, p, seeds, nu, nv, inv_n, walk, m, padded);
             if (assumed >= T(0) || !s.shadows) {
                 const T visible = s.shadows ? assumed : T(1);
                 for (int k = 0; k < padded; ++k) batch.through[k] = visible;
@@ -529,9 +530,10 @@ template <class T, class SceneT>
     // §9: whether the shadow rays to the probe samples all find `expected`; only the probes are placed.
     const auto probe_agrees = [&](T expected) {
         const std::uint32_t count = probes.start();
+        detail::StrataWalk walk = probes.walk();
         for (std::uint32_t t0 = 0; t0 < count; t0 += std::uint32_t(chunk)) {
             const int m = int(std::min(count - t0, std::uint32_t(chunk)));
-            batch.place(light, p, seeds, nu, nv, inv_n, probes.grid(), int(t0), m, (m + W - 1) / W * W);
+            batch.place(light, p, seeds, nu, nv, inv_n, walk, m, (m + W - 1) / W * W);
             int r = 0;
             for (int k = 0; k < m; ++k)
                 if (batch.n_dot_l[k] > T(0)) aim(k, r);
