@@ -370,9 +370,7 @@ private:
                 if (ref & Tree::leaf_bit) {
                     const detail::TriangleBlock<T>& b = blocks[ref & ~Tree::leaf_bit];
                     for (int m = 0, live = detail::live_lanes(b); m < live; ++m) {
-                        const Triangle<T> t = lane(b, m);
-                        const Vertex<double> v0 = to_double(t.v0);
-                        const Vertex<double> N = 0.5 * cross(to_double(t.v1) - v0, to_double(t.v2) - v0);
+                        const Vertex<double> N = area_vector(lane(b, m));
                         spread += length(N - length(N) * n); // areaᵢ·|nᵢ − m|
                     }
                     spread += 2 * err; // each N from rounded edges, twice
@@ -412,7 +410,7 @@ private:
         for (int m = 0; m < live; ++m) {
             const Triangle<T> t = lane(b, m);
             const Vertex<double> v0 = to_double(t.v0), v1 = to_double(t.v1), v2 = to_double(t.v2);
-            const Vertex<double> N = 0.5 * cross(v1 - v0, v2 - v0); // Barill: area vector
+            const Vertex<double> N = area_vector(t);
             a += N, total += length(N), weighted += length(N) * ((v0 + v1 + v2) / 3.0);
             err += 2.5 * ud * length(v1 - v0) * length(v2 - v0); // N from rounded edges
         }
@@ -425,6 +423,12 @@ private:
             for (const Vertex<T>& v : {t.v0, t.v1, t.v2}) r2 = std::max(r2, dot(to_double(v) - c, to_double(v) - c));
         }
         r = std::sqrt(r2);
+    }
+
+    // Barill et al.: a triangle's area vector ½ (v1 − v0) × (v2 − v0), in double.
+    [[nodiscard]] static Vertex<double> area_vector(const Triangle<T>& t) noexcept {
+        const Vertex<double> v0 = to_double(t.v0);
+        return 0.5 * cross(to_double(t.v1) - v0, to_double(t.v2) - v0);
     }
 
     [[nodiscard]] static Vertex<double> to_double(const Vertex<T>& v) noexcept {
