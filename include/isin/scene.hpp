@@ -80,6 +80,18 @@ struct KindAcceleration {
     std::shared_ptr<const TriangleBatch<T>> batch;
 };
 
+// f(i, triangle) for the objects of a triangle kind searched one by one (no Bvh), in order, but those a
+// Bvh would leave out (Bvh::bounds not usable: zero-area or non-finite triangles); stops at the first
+// f that returns true, and returns whether one did.
+template <class T, class Objects, class F>
+bool any_usable_triangle(const Objects& vec, F&& f) {
+    for (std::size_t i = 0; i < vec.size(); ++i) {
+        const Triangle<T>& tri = *triangle_of(vec[i].shape);
+        if (Bvh<T>::bounds(tri).usable() && f(i, tri)) return true;
+    }
+    return false;
+}
+
 // Whether a scene changed since its accelerations were built, and the lock under which the first
 // of several concurrent traces builds them. A copy takes the flag and a lock of its own.
 struct CommitState {

@@ -182,13 +182,12 @@ inline void Scene<T, Shapes...>::closest_of_kind(Kind kind, const Objects& vec, 
             const PointHit<T> h = detail::point_hit_of(bvh.blocks(), detail::SameSpace<T>{}, n);
             return take(h, h.primitive);
         }
-        for (std::size_t i = 0; i < vec.size(); ++i) {
-            const Triangle<T>& tri = *triangle_of(vec[i].shape);
-            if (!Bvh<T>::bounds(tri).usable()) continue; // as a Bvh: no zero-area or non-finite triangles
+        (void)detail::any_usable_triangle<T>(vec, [&](std::size_t i, const Triangle<T>& tri) {
             const PointHit<T> h = isin::closest_point(p, tri);
             const T d2 = h.distance * h.distance;
             if (d2 < best2 || (d2 == best2 && !best)) best2 = d2, take(h, static_cast<std::uint32_t>(i));
-        }
+            return false;
+        });
     } else if constexpr (std::is_same_v<Shape, Sphere<T>>) {
         const auto visit = [&](std::uint32_t i) {
             const PointHit<T> h = detail::closest_on_sphere(vec[i].shape, p);

@@ -58,11 +58,10 @@ inline std::size_t Scene<T, Shapes...>::count_hits_of_kind(Kind kind, const Obje
         if (accel.triangles) return accel.triangles->count_hits(ray, t_max); // whatever triangle_method is
         detail::WatertightShear<T> shear;
         if (!shear.set(ray.direction)) return 0;
-        for (std::size_t i = 0; i < vec.size(); ++i) {
-            const Triangle<T>& tri = *triangle_of(vec[i].shape);
-            if (!Bvh<T>::bounds(tri).usable()) continue; // as a Bvh: no zero-area or non-finite triangles
+        (void)detail::any_usable_triangle<T>(vec, [&](std::size_t, const Triangle<T>& tri) {
             count += detail::crosses(tri.v0 - ray.origin, tri.v1 - ray.origin, tri.v2 - ray.origin, shear, t_max);
-        }
+            return false;
+        });
     } else if constexpr (std::is_same_v<Shape, Sphere<T>>) {
         if (accel.objects && !accel.objects->empty()) { // the spheres whose boxes the ray enters
             T t = t_max;

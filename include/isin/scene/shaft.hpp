@@ -70,12 +70,8 @@ inline bool Scene<T, Shapes...>::kind_meets_shaft(Kind kind, const Objects& vec,
     if constexpr (is_triangle_kind<Shape>::value) {
         if (accel.triangles)
             return detail::triangles_may_meet(accel.triangles->tree(), accel.triangles->blocks(), shaft);
-        for (const auto& object : vec) {
-            const Triangle<T>& tri = *triangle_of(object.shape);
-            if (!Bvh<T>::bounds(tri).usable()) continue; // as a Bvh: no zero-area or non-finite triangles
-            if (shaft.triangle_may_meet(tri.v0, tri.v1, tri.v2)) return true;
-        }
-        return false;
+        return detail::any_usable_triangle<T>(
+            vec, [&](std::size_t, const Triangle<T>& tri) { return shaft.triangle_may_meet(tri.v0, tri.v1, tri.v2); });
     } else {
         const auto meets = [&](std::uint32_t i) {
             if constexpr (std::is_same_v<Shape, Sphere<T>>) {
