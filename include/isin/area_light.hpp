@@ -318,16 +318,14 @@ struct LightSampleChunk {
 template <class T>
 struct ProbeRecord {
     static constexpr std::uint32_t kept = 256;
-    std::uint32_t pu, pv, nv;
+    std::uint32_t pu = 0, pv = 0, nv = 0;
     bool traced = false;
     T seen[kept];
-
-    ProbeRecord(std::uint32_t strata_u, std::uint32_t strata_v) noexcept
-        : pu((strata_u + 1) / 2), pv(strata_v > 1 ? (strata_v + 1) / 2 : 1u), nv(strata_v) {}
     /// A walk over the probes.
     [[nodiscard]] StrataWalk walk() const noexcept { return {pu, pv, 2u, nv > 1 ? 2u : 1u}; }
-    /// Forgets every probe (none traced yet); returns how many there are.
-    std::uint32_t start() noexcept {
+    /// Forgets every probe (none traced yet) of nu × nv strata; returns how many there are.
+    std::uint32_t start(std::uint32_t strata_u, std::uint32_t strata_v) noexcept {
+        pu = (strata_u + 1) / 2, pv = strata_v > 1 ? (strata_v + 1) / 2 : 1u, nv = strata_v;
         traced = true;
         for (std::uint32_t o = 0; o < std::min(pu * pv, kept); ++o) seen[o] = T(-1);
         return pu * pv;
@@ -488,7 +486,7 @@ template <class T, class SceneT>
     for (T& t : one) t = T(1);
     V diffuse_sum = V(T(0)), specular_sum = V(T(0));
     const auto load = [](const T* a) { return detail::load_lanes<T, V>(a); };
-    detail::ProbeRecord<T> probes(nu, nv);
+    detail::ProbeRecord<T> probes; // traced from 64 samples on
     // Shadow ray r goes from p towards sample k of the chunk.
     const auto aim = [&](int k, int& r) {
         ray_of[r] = k, rays[r++] = {p.from, Vertex<T>{batch.qx[k], batch.qy[k], batch.qz[k]} - p.from};
@@ -507,7 +505,7 @@ template <class T, class SceneT>
                 for (int k = 0; k < padded; ++k) {
                     batch.through[k] = T(0);
                     if (!(batch.n_dot_l[k] > T(0))) continue;
-                    const T found = probes.found(batch.column[k], batch.row[k]);
+                    const T found = probes.traced ? probes.found(batch.column[k], batch.row[k]) : T(-1);
                     if (found >= T(0))
                         batch.through[k] = found;
                     else
@@ -529,7 +527,7 @@ template <class T, class SceneT>
     constexpr int probe_from = 64;
     // §9: whether the shadow rays to the probe samples all find `expected`; only the probes are placed.
     const auto probe_agrees = [&](T expected) {
-        const std::uint32_t count = probes.start();
+        const std::uint32_t count = probes.start(nu, nv);
         detail::StrataWalk walk = probes.walk();
         for (std::uint32_t t0 = 0; t0 < count; t0 += std::uint32_t(chunk)) {
             const int m = int(std::min(count - t0, std::uint32_t(chunk)));
