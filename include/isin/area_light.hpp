@@ -525,27 +525,6 @@ template <class T, class SceneT>
     };
     // Below this many samples the probes cost more than the rays they save (one small stream a point).
     constexpr int probe_from = 64;
-    // §9: whether the shadow rays to the probe samples all find `expected`; only the probes are placed.
-    const auto probe_agrees = [&](T expected) {
-        const std::uint32_t count = probes.start(nu, nv);
-        detail::StrataWalk walk = probes.walk();
-        for (std::uint32_t t0 = 0; t0 < count; t0 += std::uint32_t(chunk)) {
-            const int m = int(std::min(count - t0, std::uint32_t(chunk)));
-            batch.place(light, p, seeds, nu, nv, inv_n, walk, m, (m + W - 1) / W * W);
-            int r = 0;
-            for (int k = 0; k < m; ++k)
-                if (batch.n_dot_l[k] > T(0)) aim(k, r);
-            shadow_rays += std::uint64_t(r);
-            detail::shadow_visibility(scene, rays, std::size_t(r), s.opaque, one, seen);
-            bool same = true;
-            for (int t = 0; t < r; ++t) {
-                probes.record(batch.column[ray_of[t]], batch.row[ray_of[t]], seen[t]);
-                same = same && seen[t] == expected;
-            }
-            if (!same) return false;
-        }
-        return true;
-    };
     if (!corners_first(LightSampling{n, s.adaptive, s.shadows, s.opaque})) {
         shade(T(-1));
     } else {
@@ -561,8 +540,30 @@ template <class T, class SceneT>
         bool agree = true;
         const T corner = detail::corner_vote(light, p, seen, agree);
         if (corner < T(0)) return {T(0), T(0), T(0)}; // §7: the whole light below p's horizon
-        if (agree && n >= probe_from && !(corner == T(1) && scene.shaft_clear(p.from, light)))
+        if (agree && n >= probe_from && !(corner == T(1) && scene.shaft_clear(p.from, light))) {
+            // §9: whether the shadow rays to the probe samples all find `expected`; only the probes are placed.
+            const auto probe_agrees = [&](T expected) {
+                const std::uint32_t count = probes.start(nu, nv);
+                detail::StrataWalk walk = probes.walk();
+                for (std::uint32_t t0 = 0; t0 < count; t0 += std::uint32_t(chunk)) {
+                    const int m = int(std::min(count - t0, std::uint32_t(chunk)));
+                    batch.place(light, p, seeds, nu, nv, inv_n, walk, m, (m + W - 1) / W * W);
+                    int r = 0;
+                    for (int k = 0; k < m; ++k)
+                        if (batch.n_dot_l[k] > T(0)) aim(k, r);
+                    shadow_rays += std::uint64_t(r);
+                    detail::shadow_visibility(scene, rays, std::size_t(r), s.opaque, one, seen);
+                    bool same = true;
+                    for (int t = 0; t < r; ++t) {
+                        probes.record(batch.column[ray_of[t]], batch.row[ray_of[t]], seen[t]);
+                        same = same && seen[t] == expected;
+                    }
+                    if (!same) return false;
+                }
+                return true;
+            };
             agree = probe_agrees(corner);
+        }
         if (agree && corner == T(0)) return {T(0), T(0), T(0)}; // umbra: every sample shadowed
         if (agree)
             if (const int order = detail::smooth_order(light, p, highlight, min_cos, n)) {
