@@ -202,15 +202,15 @@ void shadow_visibility(const SceneT& scene, const Ray<T>* rays, std::size_t coun
 /// bundles narrower than rows across the light (on the knot of benchmarks/area_lights, 256
 /// samples, 21-29% less time). Counted on from call to call, without divisions.
 struct StrataWalk {
-    std::uint32_t u, v, step_u, step_v;
+    std::uint32_t u, step_u, step_v;
     std::uint32_t side;         // 8, 4 or 1: the blocks' or tiles' side, or row by row
     std::uint32_t i = 0, j = 0; // the next block's, tile's or stratum's first column and row
 
     StrataWalk(std::uint32_t grid_u, std::uint32_t grid_v, std::uint32_t every_u = 1,
                std::uint32_t every_v = 1) noexcept
-        : u(grid_u), v(grid_v), step_u(every_u), step_v(every_v), side(grid_u % 8 == 0 && grid_v % 8 == 0   ? 8u
-                                                                       : grid_u % 4 == 0 && grid_v % 4 == 0 ? 4u
-                                                                                                            : 1u) {}
+        : u(grid_u), step_u(every_u), step_v(every_v), side(grid_u % 8 == 0 && grid_v % 8 == 0   ? 8u
+                                                            : grid_u % 4 == 0 && grid_v % 4 == 0 ? 4u
+                                                                                                 : 1u) {}
 
     /// The next `count` strata (at most 64, and 64 but for the last call) into column[] and row[],
     /// in the light's strata (the grid's scaled by the steps).
@@ -505,7 +505,7 @@ template <class T, class SceneT>
                 for (int k = 0; k < padded; ++k) {
                     batch.through[k] = T(0);
                     if (!(batch.n_dot_l[k] > T(0))) continue;
-                    const T found = probes.traced ? probes.found(batch.column[k], batch.row[k]) : T(-1);
+                    const T found = probes.found(batch.column[k], batch.row[k]); // −1: not traced
                     if (found >= T(0))
                         batch.through[k] = found;
                     else
