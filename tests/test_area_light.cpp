@@ -244,6 +244,62 @@ TEST_CASE_TEMPLATE("rect_light_term: from 64 samples, adaptive probes find an oc
     CHECK(std::abs(adaptive_sum - uniform_sum) < 0.01 * uniform_sum);
 }
 
+TEST_CASE_TEMPLATE("rect_light_terms_together: each point's rect_light_term, bit for bit and ray for ray", T, float,
+                   double) {
+    const FloorScene<T> fs(true); // the edge x = 0 at y = 10 crosses the light from every point below
+    constexpr int G = isin::together_points;
+    for (const int samples : {1, 7, 16, 64, 256})
+        for (const bool opaque : {true, false}) {
+            CAPTURE(samples);
+            CAPTURE(opaque);
+            isin::LitPoint<T> p[G];
+            std::uint64_t seed[G];
+            for (int j = 0; j < G; ++j) {
+                const isin::Vertex<T> P{T(-6) + T(12) * T(j) / T(G - 1), fs.floor_y, T(60) + T(0.1) * T(j)};
+                const T shininess = j % 2 ? T(7.5) : T(20); // std::pow, then lane_power
+                p[j] = {P,         P + isin::Vertex<T>{0, T(1e-3), 0},
+                        {0, 1, 0}, {0, 1, 0},
+                        T(0.8),    T(0.5),
+                        shininess, {1, T(0.5), T(0.25)},
+                        {1, 1, 1}};
+                seed[j] = isin::light_seed(P, 0);
+            }
+            isin::LightSampling s;
+            s.samples = samples, s.adaptive = false, s.opaque = opaque;
+            isin::Color<T> together[G];
+            std::uint64_t together_rays = 0, own_rays = 0;
+            isin::rect_light_terms_together(fs.scene, fs.light, p, seed, G, s, together_rays, together);
+            int shadowed = 0, compared = 0;
+            for (int j = 0; j < G; ++j) {
+                const auto own = isin::rect_light_term(fs.scene, fs.light, p[j], seed[j], s, own_rays);
+                CHECK(together[j].r == own.r);
+                CHECK(together[j].g == own.g);
+                CHECK(together[j].b == own.b);
+                shadowed += own.r < together[G - 1].r;
+                // With corners first: where they disagree, every sample's ray, as without.
+                isin::LightSampling adaptive = s;
+                adaptive.adaptive = true;
+                isin::Ray<T> rays[4];
+                T one[4] = {1, 1, 1, 1}, seen[4];
+                for (int c = 0; c < 4; ++c) rays[c] = {p[j].from, isin::light_corner(fs.light, c) - p[j].from};
+                isin::detail::shadow_visibility(fs.scene, rays, 4, opaque, one, seen);
+                bool agree = true;
+                if (!isin::corners_first(adaptive) || isin::detail::corner_vote(fs.light, p[j], seen, agree) < T(0) ||
+                    agree)
+                    continue;
+                std::uint64_t rays_after_corners = 0;
+                const auto after =
+                    isin::rect_light_term(fs.scene, fs.light, p[j], seed[j], adaptive, rays_after_corners, seen);
+                CHECK(after.r == together[j].r);
+                CHECK(after.b == together[j].b);
+                ++compared;
+            }
+            CHECK(together_rays == own_rays);
+            if (samples > 1) CHECK(shadowed >= G / 4); // the edge hides part of the light from the left points
+            if (samples >= 8) CHECK(compared >= G / 2);
+        }
+}
+
 TEST_CASE("StrataWalk: every stratum once; 16 in a row fill a 4 × 4 square where the grid allows") {
     const std::uint32_t grids[][2] = {{1, 1},  {4, 4},  {8, 8},  {16, 16}, {32, 32}, {64, 64}, {16, 8},
                                       {8, 16}, {12, 4}, {4, 12}, {7, 3},   {5, 1},   {24, 8},  {10, 10}};

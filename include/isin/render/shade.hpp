@@ -382,6 +382,22 @@ template <class T, template <class> class... S>
 Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shading<T>& s, int depth,
                      const RenderOptions& opt, RenderStats& stats);
 
+// What shading the point in lane k under an area light needs (after side_pass).
+template <class T>
+[[nodiscard]] LitPoint<T> lit_point(const T* lanes, std::size_t stride, std::size_t k) noexcept {
+    using Lanes = ShadingLanes<T>;
+    const auto at = [&](std::size_t f) { return lanes[f * stride + k]; };
+    return {Lanes::vertex(lanes, stride, k, Lanes::px),
+            Lanes::vertex(lanes, stride, k, Lanes::hx),
+            Lanes::vertex(lanes, stride, k, Lanes::nx),
+            Lanes::vertex(lanes, stride, k, Lanes::vx),
+            at(Lanes::kd),
+            at(Lanes::ks),
+            at(Lanes::shininess),
+            {at(Lanes::cr), at(Lanes::cg), at(Lanes::cb)},
+            {at(Lanes::sr), at(Lanes::sg), at(Lanes::sb)}};
+}
+
 // The scene's area lights at the point in lane k (after side_pass), added to its local colour
 // after the point lights', in the lights' order: the same bits for a lane of a stream and for
 // trace()'s one point.
@@ -390,22 +406,18 @@ Color<T> end_shading(const Scene<T, S...>& scene, const Ray<T>& ray, const Shadi
 template <class T, template <class> class... S>
 void rect_lights_into_lanes(const Scene<T, S...>& scene, T* lanes, std::size_t stride, std::size_t k, bool opaque,
                             const RenderOptions& opt, RenderStats& stats, const T* corners = nullptr,
-                            std::size_t corner_stride = 0, std::size_t first = 0, std::size_t last = SIZE_MAX) {
+                            std::size_t corner_stride = 0, std::size_t first = 0, std::size_t last = SIZE_MAX,
+                            const Color<T>* term = nullptr, const bool* known = nullptr) {
     using Lanes = ShadingLanes<T>;
-    const auto at = [&](std::size_t f) { return lanes[f * stride + k]; };
-    const LitPoint<T> p{Lanes::vertex(lanes, stride, k, Lanes::px),
-                        Lanes::vertex(lanes, stride, k, Lanes::hx),
-                        Lanes::vertex(lanes, stride, k, Lanes::nx),
-                        Lanes::vertex(lanes, stride, k, Lanes::vx),
-                        at(Lanes::kd),
-                        at(Lanes::ks),
-                        at(Lanes::shininess),
-                        {at(Lanes::cr), at(Lanes::cg), at(Lanes::cb)},
-                        {at(Lanes::sr), at(Lanes::sg), at(Lanes::sb)}};
+    const LitPoint<T> p = lit_point(lanes, stride, k);
     const LightSampling sampling{std::clamp(opt.light_samples, 1, RenderOptions::max_light_samples),
                                  opt.adaptive_light_samples, opt.shadows, opaque};
     Color<T> sum = Lanes::local(lanes, stride, k);
     for (std::size_t i = first; i < std::min(last, scene.rect_lights.size()); ++i) {
+        if (known && known[(i - first) * corner_stride + k]) {
+            sum += term[(i - first) * corner_stride + k];
+            continue;
+        }
         T seen[4];
         if (corners)
             for (std::size_t c = 0; c < 4; ++c) seen[c] = corners[(4 * (i - first) + c) * corner_stride + k];

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 
 #include "../scene.hpp"
 #include "options.hpp"
@@ -73,6 +74,55 @@ ISIN_DETAIL_INLINE void point_lights_stream(const Scene<T, S...>& scene, T* lane
     }
 }
 
+// §9: area light i's terms at the stream's points whose every sample gets its shadow ray (corners
+// that disagree, or none traced: `corners`, where given, holds what corner c found from point k at
+// corners[c·count + k]), by rect_light_terms_together for runs of consecutive such points whose
+// origins lie within together_spread strata of each other: into term[k], known[k] set. The bits
+// are rect_light_term's; the others are left to it.
+template <class T, template <class> class... S>
+void rect_light_runs(const Scene<T, S...>& scene, const T* lanes, int count, std::size_t i, const T* corners,
+                     const LightSampling& sampling, RenderStats& stats, Color<T>* term, bool* known) {
+    constexpr std::size_t stride = stream_rays;
+    const RectLight<T>& light = scene.rect_lights[i];
+    const LightStrata strata = light_strata(sampling.samples, length(light.edge_u), length(light.edge_v));
+    const T reach =
+        T(together_spread) * std::min(length(light.edge_u) / T(strata.nu), length(light.edge_v) / T(strata.nv));
+    LitPoint<T> p[stream_rays];
+    int member[stream_rays], members = 0;
+    for (int k = 0; k < count; ++k) {
+        T seen[4];
+        if (corners) {
+            for (int c = 0; c < 4; ++c) seen[c] = corners[std::size_t(c * count + k)];
+            if (seen[1] == seen[0] && seen[2] == seen[0] && seen[3] == seen[0]) continue; // agree, whatever votes
+        }
+        p[members] = lit_point(lanes, stride, std::size_t(k));
+        if (corners) {
+            bool agree = true;
+            if (corner_vote(light, p[members], seen, agree) < T(0) || agree) continue; // not every sample's ray
+        }
+        member[members++] = k;
+    }
+    for (int a = 0; a < members;) {
+        Vertex<T> lo = p[a].from, hi = lo; // the run's origins' box
+        int b = a + 1;
+        for (; b < members && b - a < together_points; ++b) {
+            const Vertex<T> f = p[b].from;
+            const Vertex<T> l{std::min(lo.x, f.x), std::min(lo.y, f.y), std::min(lo.z, f.z)};
+            const Vertex<T> h{std::max(hi.x, f.x), std::max(hi.y, f.y), std::max(hi.z, f.z)};
+            if (!(std::max({h.x - l.x, h.y - l.y, h.z - l.z}) <= reach)) break;
+            lo = l, hi = h;
+        }
+        if (b - a >= 2) { // one point alone: rect_light_term
+            std::uint64_t seed[together_points];
+            Color<T> out[together_points];
+            for (int j = a; j < b; ++j) seed[j - a] = light_seed(p[j].point, i);
+            rect_light_terms_together(scene, light, p + a, seed, b - a, sampling, stats.shadow, out);
+            for (int j = a; j < b; ++j) term[member[j]] = out[j - a], known[member[j]] = true;
+        }
+        a = b;
+    }
+}
+
 // §9: the area lights' terms into the lanes of a stream's `count` shaded points.
 template <class T, template <class> class... S>
 ISIN_DETAIL_INLINE void rect_lights_stream(const Scene<T, S...>& scene, T* lanes, int count, bool opaque,
@@ -113,9 +163,19 @@ ISIN_DETAIL_INLINE void rect_lights_stream(const Scene<T, S...>& scene, T* lanes
                     scene.transmittance(corner_rays, m, one, corners);
                 }
             }
+            // The terms of the points shaded together (rect_light_runs), light i's at (i − first)·count + k.
+            Color<T> term[lights_at_once * N] = {};
+            bool known[lights_at_once * N] = {};
+            constexpr bool together = std::is_same_v<T, float>; // packets are float's
+            if constexpr (together)
+                for (std::size_t i = first; i < last && sampling.shadows; ++i)
+                    rect_light_runs(scene, lanes, count, i,
+                                    traced ? corners + 4 * (i - first) * std::size_t(count) : nullptr, sampling, stats,
+                                    term + (i - first) * std::size_t(count), known + (i - first) * std::size_t(count));
             for (std::size_t i = 0; i < std::size_t(count); ++i)
                 rect_lights_into_lanes(scene, lanes, stride, i, opaque, opt, stats, traced ? corners : nullptr,
-                                       std::size_t(count), first, last);
+                                       std::size_t(count), first, last, together ? term : nullptr,
+                                       together ? known : nullptr);
         }
     }
 }
