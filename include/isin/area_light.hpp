@@ -164,6 +164,13 @@ template <class V>
     return result;
 }
 
+/// The cosine below which a highlight term cos^shininess is under 2^-24 of ks and is left out; 2
+/// (none counts) without a positive shininess.
+template <class T>
+[[nodiscard]] inline T least_highlight_cosine(T shininess) noexcept {
+    return shininess > T(0) ? std::exp2(T(-24) / shininess) : T(2);
+}
+
 /// The shininess as an exponent for lane_power where it is a whole number from 1 to 4,096, else 0.
 template <class T>
 [[nodiscard]] inline std::uint32_t integral_power(T shininess) noexcept {
@@ -284,6 +291,18 @@ struct LightSampleChunk {
             const auto [rx, ry, rz] = lane_reflect<T>(-lx, -ly, -lz, V(p.N.x), V(p.N.y), V(p.N.z));
             store_lanes(lane_dot(rx, ry, rz, V(p.V.x), V(p.V.y), V(p.V.z)), cosine + b);
             store_lanes(select(c > T(0), c, V(T(0))), n_dot_l + b); // §7: facing away → unlit
+        }
+    }
+
+    /// Adds weight·(N·L) and weight·spec of samples 0 … padded − 1 to `diffuse` and `specular`, a
+    /// register at a time (sample k in lane k mod the width).
+    template <class V>
+    ISIN_DETAIL_INLINE void add_weighted(const T* weight, V& diffuse, V& specular, int padded) const noexcept {
+        constexpr int W = int(LaneRegister<T>::width);
+        for (int b = 0; b < padded; b += W) {
+            const V w = load_lanes<T, V>(weight + b);
+            diffuse = lane_fma(w, load_lanes<T, V>(n_dot_l + b), diffuse);
+            specular = lane_fma(w, load_lanes<T, V>(spec + b), specular);
         }
     }
 
@@ -434,11 +453,7 @@ void quadrature_sums(LightSampleChunk<T>& batch, const RectLight<T>& light, cons
     for (int k = 0; k < padded; ++k) batch.through[k] = T(1);
     batch.highlights(p, highlight, power, min_cos, padded);
     V diffuse_sum = V(T(0)), specular_sum = V(T(0));
-    for (int b = 0; b < padded; b += W) {
-        const V weights = load_lanes<T, V>(w + b);
-        diffuse_sum = lane_fma(weights, load_lanes<T, V>(batch.n_dot_l + b), diffuse_sum);
-        specular_sum = lane_fma(weights, load_lanes<T, V>(batch.spec + b), specular_sum);
-    }
+    batch.add_weighted(w, diffuse_sum, specular_sum, padded);
     diffuse = lane_total<T>(diffuse_sum), specular = lane_total<T>(specular_sum);
 }
 
@@ -466,15 +481,13 @@ template <class T, class SceneT>
                                        std::uint64_t seed, const LightSampling& s, std::uint64_t& shadow_rays,
                                        const T* corners = nullptr) {
     using V = typename detail::LaneRegister<T>::V;
-    using detail::lane_fma, detail::select; // a register's own (found by ADL) or one value's
     constexpr int W = int(detail::LaneRegister<T>::width);
     const LightStrata strata = light_strata(s.samples, length(light.edge_u), length(light.edge_v));
     const int n = strata.nu * strata.nv;
     const auto nu = std::uint32_t(strata.nu), nv = std::uint32_t(strata.nv);
     const T inv_n = T(1) / T(n);
     const detail::PatternSeeds seeds = detail::pattern_seeds(seed);
-    // A highlight term below 2^-24 of ks is left out: cos^shininess < 2^-24 where cos < 2^(-24/shininess).
-    const T min_cos = p.shininess > T(0) ? std::exp2(T(-24) / p.shininess) : T(2);
+    const T min_cos = detail::least_highlight_cosine(p.shininess);
     const std::uint32_t power = detail::integral_power(p.shininess); // 0: std::pow, one sample at a time
     const bool highlight = p.ks != T(0); // without, the highlight sum is not needed (0·sum adds nothing)
     constexpr int chunk = detail::LightSampleChunk<T>::size;
@@ -485,7 +498,6 @@ template <class T, class SceneT>
     int ray_of[room]; // each shadow ray's sample
     for (T& t : one) t = T(1);
     V diffuse_sum = V(T(0)), specular_sum = V(T(0));
-    const auto load = [](const T* a) { return detail::load_lanes<T, V>(a); };
     detail::ProbeRecord<T> probes; // traced from 64 samples on
     // Shadow ray r goes from p towards sample k of the chunk.
     const auto aim = [&](int k, int& r) {
@@ -516,11 +528,7 @@ template <class T, class SceneT>
                 for (int t = 0; t < r; ++t) batch.through[ray_of[t]] = seen[t];
             }
             batch.highlights(p, highlight, power, min_cos, padded);
-            for (int b = 0; b < padded; b += W) {
-                const V visible = load(batch.through + b);
-                diffuse_sum = lane_fma(visible, load(batch.n_dot_l + b), diffuse_sum);
-                specular_sum = lane_fma(visible, load(batch.spec + b), specular_sum);
-            }
+            batch.add_weighted(batch.through, diffuse_sum, specular_sum, padded); // §9: the lit samples' terms
         }
     };
     // Below this many samples the probes cost more than the rays they save (one small stream a point).
@@ -593,7 +601,6 @@ void rect_light_terms_together(const SceneT& scene, const RectLight<T>& light, c
                                const std::uint64_t* seed, int count, const LightSampling& s, std::uint64_t& shadow_rays,
                                Color<T>* out) {
     using V = typename detail::LaneRegister<T>::V;
-    using detail::lane_fma;
     constexpr int W = int(detail::LaneRegister<T>::width), G = together_points;
     constexpr int chunk = detail::LightSampleChunk<T>::size;
     count = std::clamp(count, 0, G);
@@ -609,7 +616,7 @@ void rect_light_terms_together(const SceneT& scene, const RectLight<T>& light, c
     alignas(64) T diffuse[points][lanes], specular[points][lanes]; // each point's sums (rect_light_term's registers)
     for (int j = 0; j < count; ++j) {
         seeds[j] = detail::pattern_seeds(seed[j]);
-        min_cos[j] = p[j].shininess > T(0) ? std::exp2(T(-24) / p[j].shininess) : T(2);
+        min_cos[j] = detail::least_highlight_cosine(p[j].shininess);
         power[j] = detail::integral_power(p[j].shininess);
         for (int w = 0; w < W; ++w) diffuse[j][w] = specular[j][w] = T(0);
     }
@@ -640,11 +647,7 @@ void rect_light_terms_together(const SceneT& scene, const RectLight<T>& light, c
             detail::LightSampleChunk<T>& b = batch[j];
             b.highlights(p[j], p[j].ks != T(0), power[j], min_cos[j], padded);
             V d = detail::load_lanes<T, V>(diffuse[j]), sp = detail::load_lanes<T, V>(specular[j]);
-            for (int c = 0; c < padded; c += W) {
-                const V visible = detail::load_lanes<T, V>(b.through + c);
-                d = lane_fma(visible, detail::load_lanes<T, V>(b.n_dot_l + c), d);
-                sp = lane_fma(visible, detail::load_lanes<T, V>(b.spec + c), sp);
-            }
+            b.add_weighted(b.through, d, sp, padded);
             detail::store_lanes(d, diffuse[j]), detail::store_lanes(sp, specular[j]);
         }
     }
